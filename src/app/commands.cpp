@@ -1,0 +1,10 @@
+#include "app/commands.h"
+
+namespace gi::app {
+
+void registerCommands(CLI::App& app) {
+  registerDevicesCommand(app);
+  registerRenderCommand(app);
+}
+
+}  // namespace gi::app

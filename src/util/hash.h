@@ -1,0 +1,16 @@
+// FNV-1a 64-bit: stable across runs and platforms, used for cache keys (not for security).
+#pragma once
+#include <cstdint>
+#include <string_view>
+
+namespace gi {
+
+inline uint64_t fnv1a64(std::string_view data, uint64_t h = 0xcbf29ce484222325ull) {
+  for (unsigned char c : data) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+}  // namespace gi
