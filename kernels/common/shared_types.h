@@ -55,6 +55,9 @@ typedef struct {
 
 #define GI_SPOT_FALLOFF_GLTF 0    // KHR_lights_punctual smooth step between inner and outer cone
 #define GI_SPOT_FALLOFF_COSINE 1  // I(θ) = I0·cos θ over the hemisphere (emissive-area stand-in)
+// Spot lights with a cone wider than this (cos of the outer half angle below it) get cube shadow
+// maps (6 faces) like point lights; narrower ones one perspective map.
+#define GI_SPOT_CUBE_COS 0.5f
 
 typedef struct {
   float position[3];  // world (point, spot)

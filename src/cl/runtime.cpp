@@ -359,6 +359,10 @@ void Context::fill(const Buffer& b, const void* pattern, size_t patternBytes, si
   if (bytes == 0) bytes = b.bytes() / patternBytes * patternBytes;
   check(clEnqueueFillBuffer(queue_, b.get(), pattern, patternBytes, 0, bytes, 0, nullptr, nullptr), "filling a device buffer");
 }
+void Context::copy(const Buffer& src, const Buffer& dst, size_t bytes, size_t srcOffset, size_t dstOffset) {
+  check(clEnqueueCopyBuffer(queue_, src.get(), dst.get(), srcOffset, dstOffset, bytes, 0, nullptr, nullptr),
+        "copying a device buffer");
+}
 void Context::finish() { check(clFinish(queue_), "waiting for the device"); }
 
 void Context::requireAllocation(uint64_t bytes, const std::string& what) const {

@@ -197,6 +197,7 @@ public:
   void fill(const Buffer& b, const void* pattern, size_t patternBytes, size_t bytes = 0);
   template <typename T>
   void fill(const Buffer& b, T value) { fill(b, &value, sizeof(T)); }
+  void copy(const Buffer& src, const Buffer& dst, size_t bytes, size_t srcOffset = 0, size_t dstOffset = 0);
   void finish();
 
   // Throws gi::Error naming `what` when `bytes` exceed what one allocation or the device can hold.
