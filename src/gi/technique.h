@@ -1,0 +1,57 @@
+// The pass interface every GI technique implements (ARCHITECTURE.md, "The pass interface").
+//
+// A technique reads the frame's rasterized views (camera G-buffer, shadow maps, RSMs, the scene)
+// and writes indirect radiance (float4 per camera pixel, linear, W/(m²·sr)) that the renderer
+// adds to the direct lighting. It owns its parameters, declared under "<name>." and settable with
+// `--set`, and launches only named kernels so the profiler prints one line per kernel.
+//
+// Adding a technique = a folder src/gi/<name>/ + kernels/gi/<name>/ + one line in registry.cpp.
+#pragma once
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cl/runtime.h"
+#include "raster/gbuffer.h"
+#include "scene/device_scene.h"
+#include "scene/scene.h"
+#include "util/params.h"
+
+namespace gi {
+
+// Everything a technique may read in a frame.
+struct FrameResources {
+  cl::Context& ctx;
+  const Scene& scene;
+  const DeviceScene& deviceScene;
+  const GBuffer& gbuffer;
+  const ShadowMapSet& shadowMaps;
+  const std::vector<ReflectiveShadowMap>& rsms;  // one per light when the technique asks for them
+  const ParamSet& params;
+};
+
+class Technique {
+public:
+  virtual ~Technique() = default;
+  virtual std::string name() const = 0;
+  virtual bool needsRsm() const { return false; }
+  // Builds programs and allocates buffers; called once before the first frame.
+  virtual void setup(const FrameResources& frame) {}
+  // Writes indirect radiance for every camera pixel into `indirect` (float4 per pixel).
+  virtual void render(const FrameResources& frame, cl::Buffer& indirect) = 0;
+};
+
+struct TechniqueInfo {
+  std::string name;
+  std::string description;
+  std::function<void(ParamSet&)> declareParams;
+  std::function<std::unique_ptr<Technique>()> create;
+};
+
+// All techniques, in the order `gi render --help` lists them. "direct" (no indirect light) is
+// handled by the renderer itself and is not in this list.
+const std::vector<TechniqueInfo>& techniqueRegistry();
+const TechniqueInfo* findTechnique(const std::string& name);
+
+}  // namespace gi

@@ -1,0 +1,84 @@
+// One frame, as data flowing down one line (ARCHITECTURE.md):
+//   shadow maps -> camera G-buffer -> RSMs (if the technique wants them) -> direct lighting
+//   -> technique (indirect) -> compose -> [host] display transform -> image
+// The renderer owns the device scene, the raster passes and the technique; `gi render`,
+// the tests and the benchmarks all drive frames through it.
+#pragma once
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cl/runtime.h"
+#include "gi/technique.h"
+#include "image/image.h"
+#include "raster/gbuffer.h"
+#include "scene/device_scene.h"
+#include "scene/scene.h"
+#include "util/params.h"
+
+namespace gi {
+
+struct RenderSettings {
+  int width = 0, height = 0;       // 0 = the scene's default size
+  std::string camera;              // name or index; "" = the scene's default camera
+  std::string technique = "direct";
+  std::vector<std::string> sets;   // "name=value" parameter assignments
+};
+
+// The renderer's own parameters (shadow and RSM resolutions) plus those of every technique.
+ParamSet declareAllParams();
+
+using PassTimes = std::vector<std::pair<std::string, double>>;  // name, device ms (first-launch order)
+
+class Renderer {
+public:
+  Renderer(cl::Context& ctx, const Scene& scene, const RenderSettings& settings);
+  ~Renderer();
+
+  // Renders one frame; returns the device time of every named kernel launch.
+  PassTimes renderFrame();
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const Camera& camera() const { return camera_; }
+  const ParamSet& params() const { return params_; }
+  uint64_t deviceBytes() const;  // scene + frame buffers
+
+  Image radiance();        // final linear radiance, RGB
+  Image directRadiance();  // direct lighting only (incl. emission)
+  Image indirectRadiance();  // the technique's output (zero for "direct")
+
+  // Writes the G-buffer planes and every RSM as EXR files into `dir`; returns the paths.
+  std::vector<std::string> writeAovs(const std::string& dir);
+
+  const GBuffer& gbuffer() const { return gbuffer_; }
+  const std::vector<ReflectiveShadowMap>& rsms() const { return rsms_; }
+  const ShadowMapSet& shadowMaps() const { return shadowMaps_; }
+  const DeviceScene& deviceScene() const { return *deviceScene_; }
+
+private:
+  Image readFloat4(const cl::Buffer& b, int w, int h, int channels);
+
+  cl::Context& ctx_;
+  Scene scene_;  // own copy: lights get shadow-map indices
+  ParamSet params_;
+  int width_ = 0, height_ = 0;
+  Camera camera_;
+  GiView cameraView_{};
+  std::unique_ptr<DeviceScene> deviceScene_;
+  std::unique_ptr<RasterPasses> raster_;
+  std::unique_ptr<Technique> technique_;
+  GBuffer gbuffer_;
+  ShadowMapSet shadowMaps_;
+  std::vector<ReflectiveShadowMap> rsms_;
+  cl::Program lightingProgram_;
+  cl::Kernel directKernel_, composeKernel_;
+  cl::Buffer direct_, indirect_, final_;
+  bool wantRsm_ = false;
+};
+
+// Picks a camera by name or index ("" = default); throws gi::Error listing the cameras.
+const Camera& selectCamera(const Scene& scene, const std::string& nameOrIndex);
+
+}  // namespace gi
