@@ -1,0 +1,182 @@
+// Ray traversal of the 8-wide BVH built by src/reference/bvh.cpp (layout documented in bvh.h).
+//
+// What it computes: trace_closest() finds the nearest triangle hit in (tmin, tmax); trace_any()
+// answers whether any hit exists there (shadow / visibility rays). Both skip alpha-masked
+// surfaces where material_cut_out() says the hit point is cut away (texture sampled at level 0).
+// Triangles are two-sided (no culling). Möller–Trumbore, non-watertight: a ray through a shared
+// edge may very rarely slip between two triangles.
+//
+// How (PoCL on a CPU runs each work-item's loop as scalar code): one node test is 6 float8 loads,
+// 6 FMAs and min/max trees, 8 children at once; the nearest hit child is visited next and the
+// others pushed with their entry distance, so popped entries farther than the current hit are
+// skipped. Triangles are tested one by one with float3 maths.
+//
+// Use: a kernel that traces takes GI_BVH_ARGS among its parameters (set on the host by
+// DeviceBvh::setArgs, 7 arguments), builds `GiBvh bvh = GI_BVH_MAKE;` and calls the functions.
+#pragma once
+#include "common/material.h"
+
+#define GI_BVH_LEAF_BIT 0x80000000u
+#define GI_BVH_EMPTY 0x7FFFFFFFu
+#define GI_BVH_ALPHA_BIT 0x80000000u
+#define GI_BVH_NODE_FLOATS 64
+#define GI_BVH_STACK 128  // entries; a full stack drops children (never seen below ~40)
+
+#define GI_BVH_ARGS                                                                        \
+  global const float *bvh_nodes, global const float4 *bvh_tris, global const uint4 *bvh_triangles, \
+      global const float2 *bvh_uvs, global const GiMaterial *bvh_materials,                \
+      global const GiTexture *bvh_textures, global const uchar4 *bvh_texels
+#define GI_BVH_MAKE \
+  gi_bvh_make(bvh_nodes, bvh_tris, bvh_triangles, bvh_uvs, bvh_materials, bvh_textures, bvh_texels)
+
+typedef struct {
+  global const float* nodes;
+  global const float4* tris;
+  global const uint4* triangles;  // scene triangles (i0, i1, i2, material): alpha test
+  global const float2* uvs;
+  global const GiMaterial* materials;
+  global const GiTexture* textures;
+  global const uchar4* texels;
+} GiBvh;
+
+typedef struct {
+  float t;
+  float u, v;  // barycentrics of vertex 1 and 2 of the original triangle
+  uint prim;   // original triangle index, GI_INVALID_ID on a miss
+} GiHit;
+
+inline GiBvh gi_bvh_make(global const float* nodes, global const float4* tris, global const uint4* triangles,
+                         global const float2* uvs, global const GiMaterial* materials,
+                         global const GiTexture* textures, global const uchar4* texels) {
+  GiBvh b;
+  b.nodes = nodes; b.tris = tris; b.triangles = triangles; b.uvs = uvs;
+  b.materials = materials; b.textures = textures; b.texels = texels;
+  return b;
+}
+
+// True when the alpha mask cuts the surface away at barycentrics (u, v) of triangle `prim`.
+inline bool gi_bvh_cut_out(const GiBvh* b, uint prim, float u, float v) {
+  uint4 tri = b->triangles[prim];
+  float2 uv = b->uvs[tri.x] * (1.0f - u - v) + b->uvs[tri.y] * u + b->uvs[tri.z] * v;
+  return material_cut_out(b->materials + tri.w, b->textures, b->texels, uv, 0.0f);
+}
+
+// Möller–Trumbore against slot `s`; same operations as gi::intersectTriangle on the host.
+inline bool gi_bvh_tri(const GiBvh* b, uint s, float3 o, float3 d, float tmin, float tmax, float* t, float* u,
+                       float* v, uint* tag) {
+  float4 v0 = b->tris[3 * s], e1 = b->tris[3 * s + 1], e2 = b->tris[3 * s + 2];
+  float3 p = cross(d, e2.xyz);
+  float det = dot(e1.xyz, p);
+  if (fabs(det) < 1e-30f) return false;
+  float inv = 1.0f / det;
+  float3 sv = o - v0.xyz;
+  float uu = dot(sv, p) * inv;
+  if (uu < 0.0f || uu > 1.0f) return false;
+  float3 q = cross(sv, e1.xyz);
+  float vv = dot(d, q) * inv;
+  if (vv < 0.0f || uu + vv > 1.0f) return false;
+  float tt = dot(e2.xyz, q) * inv;
+  if (!(tt > tmin && tt < tmax)) return false;
+  *t = tt; *u = uu; *v = vv; *tag = as_uint(v0.w);
+  return true;
+}
+
+// Shared traversal. any_hit: stop at the first (unmasked) hit.
+inline bool gi_bvh_trace(const GiBvh* b, float3 o, float3 d, float tmin, float tmax, bool any_hit, GiHit* hit) {
+  float3 inv;
+  inv.x = fabs(d.x) > 1e-20f ? 1.0f / d.x : copysign(1e20f, d.x);
+  inv.y = fabs(d.y) > 1e-20f ? 1.0f / d.y : copysign(1e20f, d.y);
+  inv.z = fabs(d.z) > 1e-20f ? 1.0f / d.z : copysign(1e20f, d.z);
+  float3 oi = o * inv;
+  // Near/far planes by direction sign: offsets of lo/hi arrays in the node (lo_x at 0, hi_x at 8...).
+  int nx = inv.x >= 0.0f ? 0 : 8, ny = inv.y >= 0.0f ? 16 : 24, nz = inv.z >= 0.0f ? 32 : 40;
+  int fx = nx ^ 8, fy = ny ^ 8, fz = nz ^ 8;
+
+  uint stack[GI_BVH_STACK];
+  float stackT[GI_BVH_STACK];
+  int sp = 0;
+  uint node = 0;
+  bool found = false;
+  hit->prim = GI_INVALID_ID;
+  hit->t = tmax;
+  const int8 bitv = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+
+  for (;;) {
+    if ((node & GI_BVH_LEAF_BIT) == 0) {
+      global const float* n = b->nodes + (size_t)node * GI_BVH_NODE_FLOATS;
+      float8 tnx = vload8(0, n + nx) * inv.x - oi.x;
+      float8 tny = vload8(0, n + ny) * inv.y - oi.y;
+      float8 tnz = vload8(0, n + nz) * inv.z - oi.z;
+      float8 tfx = vload8(0, n + fx) * inv.x - oi.x;
+      float8 tfy = vload8(0, n + fy) * inv.y - oi.y;
+      float8 tfz = vload8(0, n + fz) * inv.z - oi.z;
+      float8 tn = fmax(fmax(tnx, tny), fmax(tnz, (float8)(tmin)));
+      float8 tf = fmin(fmin(tfx, tfy), fmin(tfz, (float8)(tmax)));
+      int8 bits = (tn <= tf) & bitv;
+      int4 b4 = bits.lo | bits.hi;
+      int2 b2 = b4.lo | b4.hi;
+      uint mask = (uint)(b2.x | b2.y);
+      if (mask != 0) {
+        global const uint* ch = (global const uint*)(n + 48);
+        if ((mask & (mask - 1)) == 0) {  // one child: no stack traffic
+          node = ch[31 - clz(mask)];
+          continue;
+        }
+        float tarr[8];
+        vstore8(tn, 0, tarr);
+        // Visit the nearest child next; push the others with their entry distance.
+        int best = -1;
+        float bestT = INFINITY;
+        uint m = mask;
+        while (m) {
+          int i = 31 - clz(m & (0u - m));
+          m &= m - 1;
+          if (tarr[i] < bestT) { bestT = tarr[i]; best = i; }
+        }
+        m = mask & ~(1u << best);
+        while (m && sp < GI_BVH_STACK) {
+          int i = 31 - clz(m & (0u - m));
+          m &= m - 1;
+          stack[sp] = ch[i];
+          stackT[sp] = tarr[i];
+          ++sp;
+        }
+        node = ch[best];
+        continue;
+      }
+    } else {
+      uint first = node & 0x07FFFFFFu, count = ((node >> 27) & 15u) + 1u;
+      for (uint s = first; s < first + count; ++s) {
+        float t, u, v;
+        uint tag;
+        if (gi_bvh_tri(b, s, o, d, tmin, tmax, &t, &u, &v, &tag)) {
+          uint prim = tag & ~GI_BVH_ALPHA_BIT;
+          if ((tag & GI_BVH_ALPHA_BIT) && gi_bvh_cut_out(b, prim, u, v)) continue;
+          tmax = t;
+          hit->t = t; hit->u = u; hit->v = v; hit->prim = prim;
+          found = true;
+          if (any_hit) return true;
+        }
+      }
+    }
+    // Pop the next entry that can still hold a nearer hit.
+    bool next = false;
+    while (sp > 0) {
+      --sp;
+      if (stackT[sp] <= tmax) { node = stack[sp]; next = true; break; }
+    }
+    if (!next) break;
+  }
+  return found;
+}
+
+// Nearest hit in (tmin, tmax). d need not be unit length (t is in units of |d|).
+inline bool trace_closest(const GiBvh* b, float3 o, float3 d, float tmin, float tmax, GiHit* hit) {
+  return gi_bvh_trace(b, o, d, tmin, tmax, false, hit);
+}
+
+// Any hit in (tmin, tmax): true = occluded.
+inline bool trace_any(const GiBvh* b, float3 o, float3 d, float tmin, float tmax) {
+  GiHit h;
+  return gi_bvh_trace(b, o, d, tmin, tmax, true, &h);
+}
