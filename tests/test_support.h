@@ -11,6 +11,7 @@ namespace gi::test {
 cl::Context& context();  // the CPU (PoCL) device unless GI_DEVICE says otherwise
 
 std::filesystem::path tempDir(const std::string& name);  // fresh, empty
+std::string readFile(const std::filesystem::path& path);
 
 struct CommandResult {
   int exitCode = 0;

@@ -138,7 +138,9 @@ void registerRenderCommand(CLI::App& app) {
   cmd->add_option("--camera", args->settings.camera, "camera name or index (default: the scene's default camera)");
   cmd->add_option("--technique", args->settings.technique, "GI technique (direct = direct lighting only)");
   cmd->add_option("--out", args->out, "output image: .png (display-transformed, 8-bit sRGB) or .exr (linear)");
-  cmd->add_option("--set", args->settings.sets, "parameter assignment name=value (repeatable; see --list-params)");
+  cmd->add_option("--set", args->settings.sets, "parameter assignment name=value (repeatable; see --list-params)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_flag("--list-params", args->listParams, "print every parameter with its default and range, then exit");
   cmd->add_flag("--timings", args->timings, "print per-kernel device milliseconds");
   cmd->add_option("--json", args->jsonPath, "write timings, settings and device as JSON to this file");
