@@ -14,6 +14,7 @@
 #define GI_GUARD_BAND_PIXELS 8192
 
 #define GI_RASTER_FLAG_ALPHA_TEST 1u
+#define GI_RASTER_FLAG_VALID 2u  // the slot holds a triangle (culled triangles leave 0)
 
 #ifdef __OPENCL_VERSION__
 #define GI_I64 long

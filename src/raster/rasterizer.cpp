@@ -41,9 +41,9 @@ void Rasterizer::render(const DeviceScene& scene, const GiView& view, Visibility
     tileOffsets_ = cl::Buffer(ctx_, tileCount * sizeof(uint32_t), CL_MEM_READ_WRITE, "rasterizer tile offsets");
     tileCursors_ = cl::Buffer(ctx_, tileCount * sizeof(uint32_t), CL_MEM_READ_WRITE, "rasterizer tile cursors");
   }
-  // Most triangles produce one record or none; clipping can produce more. On overflow the
-  // capacity grows and the setup runs again (read back below), so nothing is ever dropped.
-  ensureCapacity(recordCapacity_, records_, scene.triangleCount + 1024, sizeof(GiRasterTriangle), "rasterizer triangles");
+  // One slot per scene triangle, then room for the pieces of clipped triangles. On overflow the
+  // capacity grows and the setup runs again (counters read back below): nothing is dropped.
+  ensureCapacity(recordCapacity_, records_, scene.triangleCount + 4096, sizeof(GiRasterTriangle), "rasterizer triangles");
   const size_t triGroups = 64;
   uint32_t counters[2] = {0, 0};
   for (;;) {
@@ -53,21 +53,23 @@ void Rasterizer::render(const DeviceScene& scene, const GiView& view, Visibility
                 uint32_t(recordCapacity_));
     ctx_.launch(setup_, cl::NDRange::d1(cl::roundUp(std::max<uint32_t>(scene.triangleCount, 1), triGroups), triGroups),
                 label + ": setup");
-    binCount_.args(records_, counters_, uint32_t(recordCapacity_), tilesX, tilesY, tileCounts_);
+    binCount_.args(records_, counters_, scene.triangleCount, uint32_t(recordCapacity_), tilesX, tilesY, tileCounts_);
     ctx_.launch(binCount_, cl::NDRange::d1(recordCapacity_, triGroups), label + ": binning");
     binScan_.args(tileCounts_, tileCount, tileOffsets_, tileCursors_, counters_);
     ctx_.launch(binScan_, cl::NDRange::d1(1), label + ": binning");
     ctx_.read(counters_, counters, sizeof counters);
-    if (counters[0] <= recordCapacity_) break;
-    ensureCapacity(recordCapacity_, records_, counters[0], sizeof(GiRasterTriangle), "rasterizer triangles");
+    if (scene.triangleCount + counters[0] <= recordCapacity_) break;
+    ensureCapacity(recordCapacity_, records_, scene.triangleCount + counters[0], sizeof(GiRasterTriangle),
+                   "rasterizer triangles");
   }
   ensureCapacity(binCapacity_, binList_, std::max<uint32_t>(counters[1], 1), sizeof(uint32_t), "rasterizer tile lists");
-  binFill_.args(records_, counters_, uint32_t(recordCapacity_), tilesX, tilesY, tileCursors_, binList_,
+  binFill_.args(records_, counters_, scene.triangleCount, uint32_t(recordCapacity_), tilesX, tilesY, tileCursors_, binList_,
                 uint32_t(binCapacity_));
   ctx_.launch(binFill_, cl::NDRange::d1(recordCapacity_, triGroups), label + ": binning");
 
+  // CPU devices: one work-item per tile (GI_VW == GI_TILE); GPUs: one per pixel.
   const int vw = ctx_.vectorWidth();
-  const size_t itemsPerTile = size_t(kTile) * (kTile / vw);
+  const size_t itemsPerTile = vw == kTile ? 1 : size_t(kTile) * (kTile / vw);
   tiles_.args(records_, tileOffsets_, tileCounts_, binList_, tilesX, tilesY, view, scene.positions, scene.uvs,
               scene.triangles, scene.materials, scene.textures, scene.texels, out.triangle, out.depth);
   ctx_.launch(tiles_, cl::NDRange::d1(tileCount * itemsPerTile, itemsPerTile), label + ": tiles");
