@@ -5,6 +5,7 @@ namespace gi::app {
 void registerCommands(CLI::App& app) {
   registerDevicesCommand(app);
   registerRenderCommand(app);
+  registerCompareCommand(app);
 }
 
 }  // namespace gi::app

@@ -9,5 +9,6 @@ void registerCommands(CLI::App& app);
 
 void registerDevicesCommand(CLI::App& app);
 void registerRenderCommand(CLI::App& app);
+void registerCompareCommand(CLI::App& app);
 
 }  // namespace gi::app
