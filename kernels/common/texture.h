@@ -6,9 +6,8 @@
 #include "common/shared_types.h"
 #include "common/srgb_table.h"
 
-inline float4 gi_texel(global const uchar4* texels, GiTexture t, uint levelOffset, int w, int h, int x, int y) {
-  x = x % w; if (x < 0) x += w;
-  y = y % h; if (y < 0) y += h;
+// Texel (x, y) of one level, 0 <= x < w, 0 <= y < h; decoded to linear.
+inline float4 gi_texel(global const uchar4* texels, GiTexture t, uint levelOffset, int w, int x, int y) {
   uchar4 c = texels[levelOffset + (uint)(y * w + x)];
   if (t.srgb)
     return (float4)(GI_SRGB_TO_LINEAR[c.x], GI_SRGB_TO_LINEAR[c.y], GI_SRGB_TO_LINEAR[c.z], c.w * (1.0f / 255.0f));
@@ -26,18 +25,20 @@ inline float4 sample_texture(global const GiTexture* table, global const uchar4*
     w = max(1, w >> 1);
     h = max(1, h >> 1);
   }
-  // Texel centres at half-integers; floor() keeps negative coordinates wrapping correctly.
+  // Texel centres at half-integers. Wrap once with floor() (keeps far-away UVs precise and
+  // negative ones correct); the right/bottom neighbour wraps to 0 at the border.
   float fx = uv.x * (float)w - 0.5f, fy = uv.y * (float)h - 0.5f;
-  if (!isfinite(fx) || !isfinite(fy)) return gi_texel(texels, t, offset, w, h, 0, 0);
-  fx = fx - floor(fx / (float)w) * (float)w;  // keep far-away UVs precise
-  fy = fy - floor(fy / (float)h) * (float)h;
+  if (!isfinite(fx) || !isfinite(fy)) return gi_texel(texels, t, offset, w, 0, 0);
+  fx -= floor(fx / (float)w) * (float)w;
+  fy -= floor(fy / (float)h) * (float)h;
   float x0f = floor(fx), y0f = floor(fy);
   float ax = fx - x0f, ay = fy - y0f;
-  int x0 = (int)x0f, y0 = (int)y0f;
-  float4 c00 = gi_texel(texels, t, offset, w, h, x0, y0);
-  float4 c10 = gi_texel(texels, t, offset, w, h, x0 + 1, y0);
-  float4 c01 = gi_texel(texels, t, offset, w, h, x0, y0 + 1);
-  float4 c11 = gi_texel(texels, t, offset, w, h, x0 + 1, y0 + 1);
+  int x0 = min((int)x0f, w - 1), y0 = min((int)y0f, h - 1);
+  int x1 = x0 + 1 == w ? 0 : x0 + 1, y1 = y0 + 1 == h ? 0 : y0 + 1;
+  float4 c00 = gi_texel(texels, t, offset, w, x0, y0);
+  float4 c10 = gi_texel(texels, t, offset, w, x1, y0);
+  float4 c01 = gi_texel(texels, t, offset, w, x0, y1);
+  float4 c11 = gi_texel(texels, t, offset, w, x1, y1);
   return mix(mix(c00, c10, ax), mix(c01, c11, ax), ay);
 }
 
