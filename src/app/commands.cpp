@@ -6,6 +6,7 @@ void registerCommands(CLI::App& app) {
   registerDevicesCommand(app);
   registerRenderCommand(app);
   registerCompareCommand(app);
+  registerReferenceCommand(app);
 }
 
 }  // namespace gi::app

@@ -10,5 +10,6 @@ void registerCommands(CLI::App& app);
 void registerDevicesCommand(CLI::App& app);
 void registerRenderCommand(CLI::App& app);
 void registerCompareCommand(CLI::App& app);
+void registerReferenceCommand(CLI::App& app);
 
 }  // namespace gi::app

@@ -1,0 +1,265 @@
+// `gi reference`: a path-traced reference image (src/reference/path_tracer.h) as linear EXR,
+// optionally with its per-pixel variance-of-the-mean EXR.
+//
+// - Progress on stderr: samples done / total, elapsed, estimated time left.
+// - Ctrl-C (SIGINT) stops after the launch in flight, writes the image so far (normalised by the
+//   samples done, and the variance if asked), says so, and exits with status 130.
+// - Cache: a finished reference is kept in <program cache dir>/references/<key>.exr (+ .var.exr),
+//   the key hashing the scene (builtin name, or the scene file's bytes plus the names and sizes of
+//   the files beside it, which covers glTF buffers and textures without reading them), camera,
+//   size, mode, spp, bounces, seed, diffuse-only and the expanded kernel source. A hit is copied
+//   to --out at once. --no-cache neither reads nor writes it. Interrupted renders are not cached.
+// - Samples per launch adapt so one launch takes about 0.3 s; results do not depend on it.
+// Hidden `gi export-scene SCENE --out DIR`: the flattened scene as one OBJ per instance plus
+// scene.json (materials, cameras, lights), for bench/cross_check_mitsuba.py.
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "app/commands.h"
+#include "app/common_options.h"
+#include "image/image.h"
+#include "reference/path_tracer.h"
+#include "render/renderer.h"
+#include "render/views.h"
+#include "scene/media_path.h"
+#include "scene/scene_loader.h"
+#include "util/file_io.h"
+#include "util/hash.h"
+
+namespace gi::app {
+
+namespace {
+
+std::atomic<bool> gInterrupted{false};
+extern "C" void onSigint(int) { gInterrupted.store(true); }
+
+struct ReferenceArgs {
+  std::string scene, camera, mode = "full", out, variance;
+  int width = 0, height = 0, spp = 256, maxBounces = 8;
+  uint32_t seed = 0;
+  bool diffuseOnly = false, noCache = false;
+  CommonOptions common;
+};
+
+std::string lowerExt(const std::string& path) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+// What identifies the scene's content cheaply (see the file comment).
+std::string sceneIdentity(const std::string& spec, const std::string& media) {
+  if (spec.empty() || spec == "cornell" || spec.rfind("builtin:", 0) == 0) return "builtin|" + spec;
+  std::filesystem::path file = resolveMediaFile(spec, media);
+  std::ostringstream id;
+  id << "file|" << std::hex << fnv1a64(readTextFile(file)) << std::dec;
+  std::vector<std::string> siblings;
+  for (auto& e : std::filesystem::directory_iterator(file.parent_path()))
+    if (e.is_regular_file()) siblings.push_back(e.path().filename().string() + ":" + std::to_string(e.file_size()));
+  std::sort(siblings.begin(), siblings.end());
+  for (auto& s : siblings) id << "|" << s;
+  return id.str();
+}
+
+std::string hex16(uint64_t v) {
+  char b[17];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
+  return b;
+}
+
+void progress(int done, int total, double elapsed, bool final) {
+  const int W = 30;
+  int filled = total > 0 ? done * W / total : W;
+  double left = done > 0 ? elapsed * double(total - done) / double(done) : 0.0;
+  std::fprintf(stderr, "\r[%.*s%.*s] %d/%d spp  %.1f s elapsed, %.1f s left   ", filled,
+               "##############################", W - filled, "..............................", done, total, elapsed,
+               left);
+  if (final) std::fprintf(stderr, "\n");
+  std::fflush(stderr);
+}
+
+void run(const ReferenceArgs& a) {
+  // Every flag is checked before any work, so a bad command writes nothing.
+  if (a.out.empty()) throw Error("reference: --out FILE.exr is required");
+  if (lowerExt(a.out) != ".exr") throw Error("--out '" + a.out + "': the reference is linear radiance, use .exr");
+  if (!a.variance.empty() && lowerExt(a.variance) != ".exr")
+    throw Error("--variance '" + a.variance + "': use .exr");
+  ReferenceMode mode = parseReferenceMode(a.mode);
+
+  Scene scene = loadScene(a.scene, a.common.media);
+  const Camera& cam = selectCamera(scene, a.camera);
+  PathTracerOptions o;
+  o.width = a.width > 0 ? a.width : scene.defaultWidth;
+  o.height = a.height > 0 ? a.height : scene.defaultHeight;
+  o.maxBounces = a.maxBounces;
+  o.mode = mode;
+  o.diffuseOnly = a.diffuseOnly;
+  o.seed = a.seed;
+
+  // Cache key.
+  std::filesystem::path cacheExr, cacheVar;
+  std::string cacheDir = cl::Context::cacheDirectory();
+  if (!a.noCache && !cacheDir.empty()) {
+    std::ostringstream k;
+    k << sceneIdentity(a.scene, a.common.media) << "|cam " << cam.name << " " << cam.position.x << ","
+      << cam.position.y << "," << cam.position.z << " " << cam.target.x << "," << cam.target.y << "," << cam.target.z
+      << " " << cam.up.x << "," << cam.up.y << "," << cam.up.z << " " << cam.yfov << "|" << o.width << "x" << o.height
+      << "|" << referenceModeName(mode) << "|spp " << a.spp << "|bounces " << o.maxBounces << "|seed " << o.seed
+      << "|diffuse " << o.diffuseOnly << "|code " << hex16(pathTracerCodeHash());
+    std::string key = hex16(fnv1a64(k.str()));
+    std::filesystem::path dir = std::filesystem::path(cacheDir) / "references";
+    cacheExr = dir / (key + ".exr");
+    cacheVar = dir / (key + ".var.exr");
+    if (std::filesystem::exists(cacheExr) && std::filesystem::exists(cacheVar)) {
+      auto copy = [](const std::filesystem::path& from, const std::string& to) {
+        writeAtomically(to, [&](const std::filesystem::path& tmp) {
+          std::filesystem::copy_file(from, tmp, std::filesystem::copy_options::overwrite_existing);
+        });
+      };
+      copy(cacheExr, a.out);
+      if (!a.variance.empty()) copy(cacheVar, a.variance);
+      std::printf("wrote %s (cached reference %s)\n", a.out.c_str(), cacheExr.string().c_str());
+      return;
+    }
+  }
+
+  cl::Context ctx(cl::selectDevice(a.common.device));
+  PathTracer pt(ctx, scene, makeCameraView(cam, o.width, o.height), o);
+  std::fprintf(stderr, "reference: %s, camera '%s', %dx%d, %s%s, %d spp, max %d bounces, seed %u; %zu triangles "
+               "(BVH %.2f s), %u emissive, %u punctual lights\n",
+               scene.name.c_str(), cam.name.c_str(), o.width, o.height, referenceModeName(mode),
+               o.diffuseOnly ? " diffuse-only" : "", a.spp, o.maxBounces, o.seed, scene.triangleCount(),
+               pt.bvhStats().buildSeconds, pt.emissiveTriangles(), pt.punctualLights());
+
+  gInterrupted.store(false);
+  auto previous = std::signal(SIGINT, onSigint);
+  auto t0 = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  int batch = 1;
+  double lastPrint = -1.0;
+  while (pt.samplesDone() < a.spp && !gInterrupted.load()) {
+    int n = std::min(batch, a.spp - pt.samplesDone());
+    auto tb = std::chrono::steady_clock::now();
+    pt.addSamples(n);
+    double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
+    // Aim at ~0.3 s per launch: responsive to Ctrl-C and progress, few launch overheads.
+    double perSample = dt / n;
+    batch = std::clamp(int(0.3 / std::max(perSample, 1e-6)), 1, 256);
+    if (elapsed() - lastPrint > 0.25 && pt.samplesDone() < a.spp) {
+      progress(pt.samplesDone(), a.spp, elapsed(), false);
+      lastPrint = elapsed();
+    }
+  }
+  std::signal(SIGINT, previous);
+  progress(pt.samplesDone(), a.spp, elapsed(), true);
+  bool interrupted = pt.samplesDone() < a.spp;
+
+  Image img = pt.image();
+  Image var = pt.variance();
+  writeImage(a.out, img);
+  if (!a.variance.empty()) writeImage(a.variance, var);
+  if (interrupted) {
+    std::fprintf(stderr, "gi: interrupted: wrote %s with %d of %d samples per pixel\n", a.out.c_str(),
+                 pt.samplesDone(), a.spp);
+    std::fflush(stderr);
+    std::exit(130);
+  }
+  if (!cacheExr.empty()) {
+    try {
+      std::filesystem::create_directories(cacheExr.parent_path());
+      writeImage(cacheVar, var);  // variance first: a hit needs both, the image is checked last
+      writeImage(cacheExr, img);
+    } catch (const std::exception& e) {
+      warn(std::string("reference cache not written: ") + e.what());
+    }
+  }
+  std::printf("wrote %s (%d spp in %.1f s)\n", a.out.c_str(), pt.samplesDone(), elapsed());
+  if (!a.variance.empty()) std::printf("wrote %s\n", a.variance.c_str());
+}
+
+// Hidden: the flattened scene as OBJ + JSON for external renderers (Mitsuba cross-check).
+void exportScene(const std::string& spec, const std::string& media, const std::string& outDir) {
+  if (outDir.empty()) throw Error("export-scene: --out DIR is required");
+  Scene scene = loadScene(spec, media);
+  std::filesystem::create_directories(outDir);
+  std::map<uint32_t, std::vector<size_t>> byInstance;
+  for (size_t t = 0; t < scene.triangleCount(); ++t) byInstance[scene.triangleInstance[t]].push_back(t);
+  nlohmann::json j;
+  j["name"] = scene.name;
+  for (const GiMaterial& m : scene.materials) {
+    nlohmann::json jm;
+    jm["base_color"] = {m.base_color[0], m.base_color[1], m.base_color[2], m.base_color[3]};
+    jm["emissive"] = {m.emissive[0], m.emissive[1], m.emissive[2]};
+    jm["metallic"] = m.metallic;
+    jm["roughness"] = m.roughness;
+    jm["textured"] = m.base_color_tex >= 0 || m.emissive_tex >= 0;
+    j["materials"].push_back(jm);
+  }
+  for (auto& [inst, tris] : byInstance) {
+    std::string file = "instance_" + std::to_string(inst) + ".obj";
+    std::ofstream o(std::filesystem::path(outDir) / file);
+    o.precision(9);
+    for (size_t t : tris)
+      for (int k = 0; k < 3; ++k) {
+        glm::vec3 p = scene.positions[scene.triangles[t][k]];
+        o << "v " << p.x << " " << p.y << " " << p.z << "\n";
+      }
+    for (size_t i = 0; i < tris.size(); ++i) o << "f " << 3 * i + 1 << " " << 3 * i + 2 << " " << 3 * i + 3 << "\n";
+    if (!o) throw Error("cannot write " + file);
+    // One material per instance is what the cross-check supports; the first triangle's is taken.
+    j["instances"].push_back({{"id", inst}, {"file", file}, {"material", scene.triangleMaterial[tris[0]]},
+                              {"triangles", tris.size()}});
+  }
+  for (const Camera& c : scene.cameras)
+    j["cameras"].push_back({{"name", c.name},
+                            {"position", {c.position.x, c.position.y, c.position.z}},
+                            {"target", {c.target.x, c.target.y, c.target.z}},
+                            {"up", {c.up.x, c.up.y, c.up.z}},
+                            {"yfov", c.yfov}});
+  for (size_t i = 0; i < scene.lights.size(); ++i) j["lights"].push_back(i < scene.lightNames.size() ? scene.lightNames[i] : "");
+  std::ofstream o(std::filesystem::path(outDir) / "scene.json");
+  o << j.dump(1) << "\n";
+  if (!o) throw Error("cannot write scene.json in " + outDir);
+  std::printf("wrote %s (%zu instances)\n", outDir.c_str(), byInstance.size());
+}
+
+}  // namespace
+
+void registerReferenceCommand(CLI::App& app) {
+  auto a = std::make_shared<ReferenceArgs>();
+  auto* cmd = app.add_subcommand("reference", "Path-trace a reference image (linear EXR) and its variance");
+  cmd->add_option("scene", a->scene, "scene: a .gltf/.glb file, a scene config .json, or nothing for the built-in Cornell box");
+  cmd->add_option("--camera", a->camera, "camera name or index (default: the scene's default camera)");
+  cmd->add_option("--width", a->width, "image width in pixels (default: the scene's)")->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", a->height, "image height in pixels (default: the scene's)")->check(CLI::Range(1, 16384));
+  cmd->add_option("--spp", a->spp, "samples per pixel (default 256)")->check(CLI::Range(1, 1 << 24));
+  cmd->add_option("--max-bounces", a->maxBounces, "largest number of reflections of a light path (default 8; 1 = direct)")
+      ->check(CLI::Range(0, 1000));
+  cmd->add_option("--mode", a->mode, "full | direct (orders 0-1) | indirect (orders >= 2) | one-bounce (order 2 only)")
+      ->check(CLI::IsMember({"full", "direct", "indirect", "one-bounce"}));
+  cmd->add_flag("--diffuse-only", a->diffuseOnly, "turn the specular lobe off (f = albedo/pi)");
+  cmd->add_option("--seed", a->seed, "random seed (default 0)");
+  cmd->add_option("--out", a->out, "output image (.exr, linear radiance)")->required();
+  cmd->add_option("--variance", a->variance, "also write the per-pixel variance of the mean (.exr)");
+  cmd->add_flag("--no-cache", a->noCache, "neither reuse nor store a cached reference");
+  addCommonOptions(cmd, a->common);
+  cmd->callback([a] { run(*a); });
+
+  auto e = std::make_shared<std::pair<std::string, std::string>>();
+  auto common = std::make_shared<CommonOptions>();
+  auto* ex = app.add_subcommand("export-scene", "Write the flattened scene as OBJ + JSON (for cross-checks)");
+  ex->group("");  // hidden from --help
+  ex->add_option("scene", e->first, "scene (as for reference)");
+  ex->add_option("--out", e->second, "output folder")->required();
+  addCommonOptions(ex, *common);
+  ex->callback([e, common] { exportScene(e->first, common->media, e->second); });
+}
+
+}  // namespace gi::app
