@@ -221,6 +221,12 @@ void Profiler::discard() {
 
 // ---------------------------------------------------------------------------------------------
 Context::Context(const DeviceInfo& device) : device_(device) {
+  vectorWidth_ = device_.isCpu ? 16 : 1;
+  if (const char* vw = std::getenv("GI_VECTOR_WIDTH"); vw && *vw) {
+    std::string v = vw;
+    if (v != "1" && v != "8" && v != "16") throw Error("GI_VECTOR_WIDTH='" + v + "': expected 1, 8 or 16");
+    vectorWidth_ = std::stoi(v);
+  }
   cl_int err = CL_SUCCESS;
   cl_context_properties props[] = {CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(device.platform), 0};
   ctx_ = clCreateContext(props, 1, &device_.id, nullptr, nullptr, &err);

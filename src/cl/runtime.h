@@ -169,7 +169,8 @@ public:
 
   // Pixels (or items) handled by one work-item in the vectorised kernels: 16 on a CPU device
   // (PoCL vectorises explicit float16 well, and loops over work-items not at all), 1 on a GPU.
-  int vectorWidth() const { return device_.isCpu ? 16 : 1; }
+  // $GI_VECTOR_WIDTH (1, 8 or 16) overrides it, so the GPU code paths can be tested on PoCL.
+  int vectorWidth() const { return vectorWidth_; }
 
   // Builds kernels/<file> (includes expanded) with the given defines plus the per-device ones
   // (GI_VW, GI_DEVICE_CPU/GPU). Uses the on-disk binary cache. Build failures throw gi::Error
@@ -209,6 +210,7 @@ public:
 
 private:
   DeviceInfo device_;
+  int vectorWidth_ = 1;
   cl_context ctx_ = nullptr;
   cl_command_queue queue_ = nullptr;
   Profiler profiler_;
