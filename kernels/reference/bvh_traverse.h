@@ -124,24 +124,41 @@ inline bool gi_bvh_trace(const GiBvh* b, float3 o, float3 d, float tmin, float t
         }
         float tarr[8];
         vstore8(tn, 0, tarr);
-        // Visit the nearest child next; push the others with their entry distance.
-        int best = -1;
-        float bestT = INFINITY;
-        uint m = mask;
-        while (m) {
-          int i = 31 - clz(m & (0u - m));
-          m &= m - 1;
-          if (tarr[i] < bestT) { bestT = tarr[i]; best = i; }
+        if (any_hit) {
+          // Order does not matter for occlusion: visit the lowest child, push the rest.
+          int first = 31 - clz(mask & (0u - mask));
+          uint m = mask & (mask - 1);
+          while (m && sp < GI_BVH_STACK) {
+            int i = 31 - clz(m & (0u - m));
+            m &= m - 1;
+            stack[sp] = ch[i];
+            stackT[sp] = tarr[i];
+            ++sp;
+          }
+          node = ch[first];
+          continue;
         }
-        m = mask & ~(1u << best);
+        // Closest hit: push the hit children sorted far to near (insertion sort into the stack
+        // top, at most 8 entries) and visit the nearest, so nearer boxes are popped first.
+        int base = sp;
+        uint m = mask;
         while (m && sp < GI_BVH_STACK) {
           int i = 31 - clz(m & (0u - m));
           m &= m - 1;
-          stack[sp] = ch[i];
-          stackT[sp] = tarr[i];
+          float t = tarr[i];
+          uint c = ch[i];
+          int k = sp;
+          while (k > base && stackT[k - 1] < t) {
+            stack[k] = stack[k - 1];
+            stackT[k] = stackT[k - 1];
+            --k;
+          }
+          stack[k] = c;
+          stackT[k] = t;
           ++sp;
         }
-        node = ch[best];
+        --sp;
+        node = stack[sp];
         continue;
       }
     } else {
