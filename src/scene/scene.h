@@ -55,6 +55,7 @@ struct Scene {
   std::vector<glm::uvec3> triangles;        // vertex indices
   std::vector<uint32_t> triangleMaterial;   // index into materials
   std::vector<uint32_t> triangleInstance;   // which node instance (mesh primitive) it came from
+  std::vector<std::string> instanceNames;   // per instance id: node/mesh name, for messages and light names
 
   std::vector<GiMaterial> materials;
   std::vector<Texture> textures;
