@@ -67,7 +67,8 @@ TEST(SceneMediaPath, DefaultsIncludeSharedScenesBesideSourceTreeAndBinary) {
   std::vector<MediaDir> path = mediaSearchPath("");
   std::vector<std::string> origins;
   for (const MediaDir& d : path) origins.push_back(d.origin);
-  std::vector<std::string> expected = {"current directory", "source tree", "binary directory", "repository scene configs"};
+  std::vector<std::string> expected = {"../shared/scenes from the current directory", "source tree", "binary directory",
+                                       "repository scene configs"};
   EXPECT_EQ(origins, expected);
   EXPECT_EQ(path[1].path, std::filesystem::path(GI_SOURCE_DIR) / ".." / "shared" / "scenes");
 }

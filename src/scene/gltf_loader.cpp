@@ -101,6 +101,7 @@ public:
 
   Scene build() {
     readModel();
+    warnAboutIgnoredFeatures();
     convertMaterials();
     addNodes();
     decodeImages();
@@ -153,12 +154,13 @@ private:
                     "KHR_materials_emissive_strength, KHR_mesh_quantization)");
   }
 
-  void warnIgnoredExtensions() const {
+  void warnAboutIgnoredFeatures() const {
     std::string ignored;
     for (const std::string& ext : model_.extensionsUsed)
       if (!kSupportedExtensions.count(ext) && !kQuietlyIgnoredExtensions.count(ext))
         ignored += (ignored.empty() ? "" : ", ") + ext;
     if (!ignored.empty()) warn(fileName_ + ": ignoring optional glTF extension(s) " + ignored);
+    if (!model_.skins.empty()) warn(fileName_ + ": skins are ignored (skinned meshes are drawn unskinned, placed by their nodes)");
   }
 
   // ---- materials and textures -------------------------------------------------------------
@@ -276,9 +278,6 @@ private:
   // ---- nodes ------------------------------------------------------------------------------
 
   void addNodes() {
-    warnIgnoredExtensions();
-    if (!model_.skins.empty()) warn(fileName_ + ": skins are ignored (meshes are placed in their bind pose)");
-
     std::vector<int> roots;
     if (!model_.scenes.empty()) {
       int chosen = model_.defaultScene >= 0 ? model_.defaultScene : 0;

@@ -34,7 +34,7 @@ std::vector<MediaDir> mediaSearchPath(const std::string& mediaDirFlag) {
   std::vector<MediaDir> dirs;
   if (!mediaDirFlag.empty()) dirs.push_back({mediaDirFlag, "--media"});
   if (const char* env = std::getenv("GI_MEDIA_DIR"); env && *env) dirs.push_back({env, "GI_MEDIA_DIR"});
-  dirs.push_back({fs::path("..") / "shared" / "scenes", "current directory"});
+  dirs.push_back({fs::current_path() / ".." / "shared" / "scenes", "../shared/scenes from the current directory"});
   dirs.push_back({fs::path(GI_SOURCE_DIR) / ".." / "shared" / "scenes", "source tree"});
   if (std::optional<fs::path> bin = runningBinaryDir())
     dirs.push_back({*bin / ".." / ".." / "shared" / "scenes", "binary directory"});

@@ -7,7 +7,7 @@
 //      refers to the file), then the current directory,
 //   2. --media DIR (the flag),
 //   3. $GI_MEDIA_DIR,
-//   4. ./../shared/scenes (relative to the current directory),
+//   4. ../shared/scenes relative to the current directory,
 //   5. GI_SOURCE_DIR/../shared/scenes (beside the source tree this binary was built from),
 //   6. <directory of the running binary>/../../shared/scenes (build/gi -> ../shared/scenes),
 //   7. GI_SOURCE_DIR/scenes (the scene configs that ship with the repository).

@@ -5,13 +5,14 @@
 
 namespace gi {
 
+namespace {
+
+// A unit vector orthogonal to unit vector n: the cross product with a world axis that is far from
+// parallel to n, which keeps the result well conditioned.
 glm::vec3 anyOrthogonal(const glm::vec3& n) {
-  // Cross with the world axis least aligned with n, which keeps the result well conditioned.
   glm::vec3 axis = std::abs(n.x) < 0.6f ? glm::vec3(1, 0, 0) : (std::abs(n.y) < 0.6f ? glm::vec3(0, 1, 0) : glm::vec3(0, 0, 1));
   return glm::normalize(glm::cross(n, axis));
 }
-
-namespace {
 
 float cornerAngle(const glm::vec3& toA, const glm::vec3& toB) {
   float la = glm::length(toA), lb = glm::length(toB);

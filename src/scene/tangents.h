@@ -22,7 +22,4 @@ std::vector<glm::vec4> generateTangents(const std::vector<glm::vec3>& positions,
                                         const std::vector<glm::vec2>& uvs,
                                         const std::vector<glm::uvec3>& triangles);
 
-// A unit vector orthogonal to unit vector n (for frames without another preferred direction).
-glm::vec3 anyOrthogonal(const glm::vec3& n);
-
 }  // namespace gi
