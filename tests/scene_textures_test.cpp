@@ -24,8 +24,8 @@ TEST(SceneTextures, MipLevelCountReachesOneTexel) {
 TEST(SceneTextures, ColourMipsAverageInLinearSpaceDataMipsAsStored) {
   // 2×2: black, white / black, white; alpha 0, 255 / 0, 255.
   std::vector<uint8_t> texels = {0, 0, 0, 0, 255, 255, 255, 255, 0, 0, 0, 0, 255, 255, 255, 255};
-  Texture colour = makeTexture("c", 2, 2, texels, true);
-  Texture data = makeTexture("d", 2, 2, texels, false);
+  Texture colour = makeTexture("c", 2, 2, texels.data(), true);
+  Texture data = makeTexture("d", 2, 2, texels.data(), false);
   ASSERT_EQ(colour.levels, 2);
   ASSERT_EQ(colour.rgba8.size(), (4u + 1u) * 4u);
   const uint8_t* c1 = &colour.rgba8[16];
@@ -43,7 +43,7 @@ TEST(SceneTextures, ColourMipsAverageInLinearSpaceDataMipsAsStored) {
 
 TEST(SceneTextures, NonSquareChainKeepsLevelSizes) {
   std::vector<uint8_t> texels(8 * 2 * 4, 100);
-  Texture t = makeTexture("wide", 8, 2, texels, true);
+  Texture t = makeTexture("wide", 8, 2, texels.data(), true);
   ASSERT_EQ(t.levels, 4);  // 8×2, 4×1, 2×1, 1×1
   EXPECT_EQ(t.rgba8.size(), size_t(16 + 4 + 2 + 1) * 4);
   for (uint8_t v : t.rgba8) EXPECT_EQ(v, 100);  // a constant image stays constant at every level

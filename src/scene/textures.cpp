@@ -7,6 +7,7 @@
 #include <cmath>
 #include <exception>
 #include <functional>
+#include <memory>
 #include <thread>
 
 // stb_image is compiled into this file with internal linkage: the tinygltf shared library links
@@ -93,23 +94,20 @@ void downsample(const uint8_t* parent, int pw, int ph, uint8_t* child, int cw, i
   }
 }
 
+// stb_image's RGBA8 decode of one image, freed when it goes out of scope.
 struct DecodedImage {
   int width = 0, height = 0;
-  std::vector<uint8_t> rgba8;
+  std::unique_ptr<stbi_uc, void (*)(void*)> pixels{nullptr, stbi_image_free};
 };
 
 DecodedImage decodeRgba8(const EncodedImage& image) {
   if (image.bytes.empty()) throw Error("image '" + image.name + "' is empty");
   if (image.bytes.size() > size_t(INT32_MAX)) throw Error("image '" + image.name + "' is too large");
-  int w = 0, h = 0, channelsInFile = 0;
-  stbi_uc* pixels = stbi_load_from_memory(image.bytes.data(), static_cast<int>(image.bytes.size()), &w, &h,
-                                          &channelsInFile, 4);
-  if (!pixels) throw Error("cannot decode image '" + image.name + "': " + stbi_failure_reason());
   DecodedImage out;
-  out.width = w;
-  out.height = h;
-  out.rgba8.assign(pixels, pixels + size_t(w) * h * 4);
-  stbi_image_free(pixels);
+  int channelsInFile = 0;
+  out.pixels.reset(stbi_load_from_memory(image.bytes.data(), static_cast<int>(image.bytes.size()), &out.width,
+                                         &out.height, &channelsInFile, 4));
+  if (!out.pixels) throw Error("cannot decode image '" + image.name + "': " + stbi_failure_reason());
   return out;
 }
 
@@ -121,8 +119,8 @@ int mipLevelCount(int width, int height) {
   return levels;
 }
 
-Texture makeTexture(std::string name, int width, int height, std::vector<uint8_t> level0, bool srgb) {
-  if (width <= 0 || height <= 0 || level0.size() != size_t(width) * height * 4)
+Texture makeTexture(std::string name, int width, int height, const uint8_t* level0, bool srgb) {
+  if (width <= 0 || height <= 0)
     throw Error("texture '" + name + "': bad size " + std::to_string(width) + "x" + std::to_string(height));
   Texture tex;
   tex.name = std::move(name);
@@ -133,8 +131,8 @@ Texture makeTexture(std::string name, int width, int height, std::vector<uint8_t
 
   size_t total = 0;
   for (int l = 0; l < tex.levels; ++l) total += size_t(std::max(1, width >> l)) * std::max(1, height >> l) * 4;
-  tex.rgba8 = std::move(level0);
   tex.rgba8.resize(total);
+  std::copy(level0, level0 + size_t(width) * height * 4, tex.rgba8.begin());
 
   size_t parentOffset = 0;
   for (int l = 1; l < tex.levels; ++l) {
@@ -168,13 +166,8 @@ std::vector<Texture> decodeTextures(const std::vector<EncodedImage>& images,
   std::vector<Texture> textures(requests.size());
   runInParallel(order, [&](size_t i) {
     DecodedImage decoded = decodeRgba8(images[i]);
-    const std::vector<size_t>& uses = requestsOfImage[i];
-    for (size_t u = 0; u < uses.size(); ++u) {
-      // The last use takes the decoded texels; earlier ones copy them.
-      std::vector<uint8_t> texels = u + 1 < uses.size() ? decoded.rgba8 : std::move(decoded.rgba8);
-      textures[uses[u]] = makeTexture(images[i].name, decoded.width, decoded.height, std::move(texels),
-                                      requests[uses[u]].srgb);
-    }
+    for (size_t r : requestsOfImage[i])
+      textures[r] = makeTexture(images[i].name, decoded.width, decoded.height, decoded.pixels.get(), requests[r].srgb);
   });
   return textures;
 }

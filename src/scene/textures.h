@@ -33,7 +33,7 @@ std::vector<Texture> decodeTextures(const std::vector<EncodedImage>& images,
 // Number of mip levels of a w×h texture down to 1×1: floor(log2(max(w, h))) + 1.
 int mipLevelCount(int width, int height);
 
-// A texture from RGBA8 level-0 texels (width·height·4 bytes), with its full mip chain.
-Texture makeTexture(std::string name, int width, int height, std::vector<uint8_t> level0, bool srgb);
+// A texture from RGBA8 level-0 texels (width·height·4 bytes at level0), with its full mip chain.
+Texture makeTexture(std::string name, int width, int height, const uint8_t* level0, bool srgb);
 
 }  // namespace gi
