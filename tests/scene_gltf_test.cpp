@@ -571,5 +571,18 @@ TEST(SceneGltf, AccessorBeyondItsBufferViewIsAnError) {
   EXPECT_NE(message.find("mesh 'short' primitive 0 attribute POSITION"), std::string::npos) << message;
 }
 
+TEST(SceneGltf, AttributeWithTooFewElementsIsAnError) {
+  auto dir = test::tempDir("scene_gltf_short_attribute");
+  GltfWriter w;
+  int pos = w.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  int uv = w.addAccessor(std::vector<float>{0, 0, 1, 0}, test::kGltfFloat, "VEC2");
+  w.addNode({{"mesh", w.addMesh("uvless", {{"POSITION", pos}, {"TEXCOORD_0", uv}})}});
+  auto file = w.write(dir, "shortattr");
+  std::string message = errorOf([&] { loadGltfScene(file); });
+  EXPECT_NE(message.find("mesh 'uvless' primitive 0: attribute TEXCOORD_0 has 2 elements, POSITION has 3"),
+            std::string::npos)
+      << message;
+}
+
 }  // namespace
 }  // namespace gi

@@ -407,6 +407,14 @@ private:
 
     std::vector<float> raw = gltf::readFloats(model_, attribute("POSITION"), 3, what + " attribute POSITION");
     const size_t vertexCount = raw.size() / 3;
+    // Every attribute has one element per vertex (glTF 2.0 §3.7.2.1).
+    auto readAttribute = [&](int accessor, const char* name, int components) {
+      std::vector<float> values = gltf::readFloats(model_, accessor, components, what + " attribute " + name);
+      if (values.size() != vertexCount * components)
+        throw Error(what + ": attribute " + name + " has " + std::to_string(values.size() / components) +
+                    " elements, POSITION has " + std::to_string(vertexCount));
+      return values;
+    };
     std::vector<glm::vec3> positions(vertexCount);
     std::memcpy(positions.data(), raw.data(), raw.size() * sizeof(float));
 
@@ -427,7 +435,7 @@ private:
 
     std::vector<glm::vec2> uvs(vertexCount, glm::vec2(0.0f));
     if (int a = attribute("TEXCOORD_0"); a >= 0) {
-      raw = gltf::readFloats(model_, a, 2, what + " attribute TEXCOORD_0");
+      raw = readAttribute(a, "TEXCOORD_0", 2);
       for (size_t v = 0; v < vertexCount; ++v) {
         glm::vec2 uv(raw[2 * v], raw[2 * v + 1]);
         uvs[v] = std::isfinite(uv.x) && std::isfinite(uv.y) ? uv : glm::vec2(0.0f);
@@ -435,18 +443,20 @@ private:
     }
     std::vector<glm::vec4> tangents;
     if (int a = attribute("TANGENT"); a >= 0 && materialHasNormalMap_[g.material]) {
-      raw = gltf::readFloats(model_, a, 4, what + " attribute TANGENT");
+      raw = readAttribute(a, "TANGENT", 4);
       tangents.resize(vertexCount);
-      for (size_t v = 0; v < vertexCount; ++v) {
+      for (size_t v = 0; v < vertexCount && !tangents.empty(); ++v) {
         glm::vec3 t(raw[4 * v], raw[4 * v + 1], raw[4 * v + 2]);
         float len = glm::length(t);
-        tangents[v] = finite(t) && len > 0.0f ? glm::vec4(t / len, raw[4 * v + 3] < 0.0f ? -1.0f : 1.0f)
-                                             : glm::vec4(1, 0, 0, 1);  // re-orthogonalised by the shader's frame
+        if (finite(t) && len > 0.0f)
+          tangents[v] = glm::vec4(t / len, raw[4 * v + 3] < 0.0f ? -1.0f : 1.0f);
+        else
+          tangents.clear();  // a broken TANGENT attribute: generate the frames instead
       }
     }
 
     if (int a = attribute("NORMAL"); a >= 0) {
-      raw = gltf::readFloats(model_, a, 3, what + " attribute NORMAL");
+      raw = readAttribute(a, "NORMAL", 3);
       g.normals.resize(vertexCount);
       std::memcpy(g.normals.data(), raw.data(), raw.size() * sizeof(float));
       repairNormals(g.normals, positions, triangles);
@@ -454,8 +464,9 @@ private:
       g.uvs = std::move(uvs);
       g.triangles = std::move(triangles);
     } else {
-      // glTF 2.0 §3.7.2.1: without normals, flat shading; each triangle gets its own vertices.
-      std::vector<glm::vec4> unweldedTangents;
+      // glTF 2.0 §3.7.2.1: without normals, flat shading (each triangle gets its own vertices),
+      // and any TANGENT attribute is ignored.
+      tangents.clear();
       for (const glm::uvec3& t : triangles) {
         glm::vec3 n = glm::normalize(glm::cross(positions[t.y] - positions[t.x], positions[t.z] - positions[t.x]));
         uint32_t first = uint32_t(g.positions.size());
@@ -463,11 +474,9 @@ private:
           g.positions.push_back(positions[t[k]]);
           g.normals.push_back(n);
           g.uvs.push_back(uvs[t[k]]);
-          if (!tangents.empty()) unweldedTangents.push_back(tangents[t[k]]);
         }
         g.triangles.emplace_back(first, first + 1, first + 2);
       }
-      tangents = std::move(unweldedTangents);
     }
 
     if (!materialHasNormalMap_[g.material])
