@@ -217,6 +217,8 @@ void BM_Embree(benchmark::State& state) {
 void rayArgs(benchmark::internal::Benchmark* b) {
   b->ArgNames({"rays", "local"});
   for (int which : {0, 1, 2}) b->Args({which, 64});
+  if (std::getenv("GI_BENCH_LOCAL_SWEEP"))
+    for (int local : {8, 16, 256}) b->Args({1, local});
 }
 void embreeArgs(benchmark::internal::Benchmark* b) {
   b->ArgNames({"rays"});

@@ -116,13 +116,19 @@ TEST(ReferenceBvh, StructureIsSound) {
       if (ref == kBvhEmpty) continue;
       if (ref & kBvhLeafBit) {
         uint32_t first = ref & 0x07FFFFFFu, count = ((ref >> 27) & 15u) + 1u;
-        for (uint32_t s = first; s < first + count; ++s) {
-          seen[bvh.triIndex[s]]++;
-          glm::vec3 v0(bvh.tris[3 * s]);
-          for (glm::vec3 p : {v0, v0 + glm::vec3(bvh.tris[3 * s + 1]), v0 + glm::vec3(bvh.tris[3 * s + 2])}) {
-            EXPECT_GE(p.x, n.lo_x[c] - 1e-6f); EXPECT_LE(p.x, n.hi_x[c] + 1e-6f);
-            EXPECT_GE(p.y, n.lo_y[c] - 1e-6f); EXPECT_LE(p.y, n.hi_y[c] + 1e-6f);
-            EXPECT_GE(p.z, n.lo_z[c] - 1e-6f); EXPECT_LE(p.z, n.hi_z[c] + 1e-6f);
+        for (uint32_t p = first; p < first + count; ++p) {
+          ASSERT_LT(p, bvh.packs.size());
+          const GiBvhTriPack& pk = bvh.packs[p];
+          for (int l = 0; l < 4; ++l) {
+            if (pk.id[l] == 0xFFFFFFFFu) continue;
+            seen[pk.id[l] & ~kBvhAlphaBit]++;
+            glm::vec3 v0(pk.v0x[l], pk.v0y[l], pk.v0z[l]);
+            glm::vec3 e1(pk.e1x[l], pk.e1y[l], pk.e1z[l]), e2(pk.e2x[l], pk.e2y[l], pk.e2z[l]);
+            for (glm::vec3 q : {v0, v0 + e1, v0 + e2}) {
+              EXPECT_GE(q.x, n.lo_x[c] - 1e-6f); EXPECT_LE(q.x, n.hi_x[c] + 1e-6f);
+              EXPECT_GE(q.y, n.lo_y[c] - 1e-6f); EXPECT_LE(q.y, n.hi_y[c] + 1e-6f);
+              EXPECT_GE(q.z, n.lo_z[c] - 1e-6f); EXPECT_LE(q.z, n.hi_z[c] + 1e-6f);
+            }
           }
         }
       } else {

@@ -8,8 +8,8 @@
 //
 // How (PoCL on a CPU runs each work-item's loop as scalar code): one node test is 6 float8 loads,
 // 6 FMAs and min/max trees, 8 children at once; the nearest hit child is visited next and the
-// others pushed with their entry distance, so popped entries farther than the current hit are
-// skipped. Triangles are tested one by one with float3 maths.
+// others pushed far to near with their entry distance, so popped entries farther than the current
+// hit are skipped. Leaves hold packs of 4 triangles tested at once with float4 maths.
 //
 // Use: a kernel that traces takes GI_BVH_ARGS among its parameters (set on the host by
 // DeviceBvh::setArgs, 7 arguments), builds `GiBvh bvh = GI_BVH_MAKE;` and calls the functions.
@@ -31,7 +31,7 @@
 
 typedef struct {
   global const float* nodes;
-  global const float4* tris;
+  global const float4* tris;       // GiBvhTriPack, 10 float4 each
   global const uint4* triangles;  // scene triangles (i0, i1, i2, material): alpha test
   global const float2* uvs;
   global const GiMaterial* materials;
@@ -61,24 +61,26 @@ inline bool gi_bvh_cut_out(const GiBvh* b, uint prim, float u, float v) {
   return material_cut_out(b->materials + tri.w, b->textures, b->texels, uv, 0.0f);
 }
 
-// Möller–Trumbore against slot `s`; same operations as gi::intersectTriangle on the host.
-inline bool gi_bvh_tri(const GiBvh* b, uint s, float3 o, float3 d, float tmin, float tmax, float* t, float* u,
-                       float* v, uint* tag) {
-  float4 v0 = b->tris[3 * s], e1 = b->tris[3 * s + 1], e2 = b->tris[3 * s + 2];
-  float3 p = cross(d, e2.xyz);
-  float det = dot(e1.xyz, p);
-  if (fabs(det) < 1e-30f) return false;
-  float inv = 1.0f / det;
-  float3 sv = o - v0.xyz;
-  float uu = dot(sv, p) * inv;
-  if (uu < 0.0f || uu > 1.0f) return false;
-  float3 q = cross(sv, e1.xyz);
-  float vv = dot(d, q) * inv;
-  if (vv < 0.0f || uu + vv > 1.0f) return false;
-  float tt = dot(e2.xyz, q) * inv;
-  if (!(tt > tmin && tt < tmax)) return false;
-  *t = tt; *u = uu; *v = vv; *tag = as_uint(v0.w);
-  return true;
+// Möller–Trumbore against the 4 triangles of pack `p` at once (the per-lane operations of
+// gi::intersectTriangle on the host). Returns the mask of lanes hit in (tmin, tmax) and their
+// t, u, v and tagged ids.
+inline int gi_bvh_pack(const GiBvh* b, uint p, float3 o, float3 d, float tmin, float tmax, float4* t, float4* u,
+                       float4* v, uint4* id) {
+  global const float4* q = b->tris + (size_t)p * 10;
+  float4 v0x = q[0], v0y = q[1], v0z = q[2], e1x = q[3], e1y = q[4], e1z = q[5], e2x = q[6], e2y = q[7], e2z = q[8];
+  float4 px = d.y * e2z - d.z * e2y, py = d.z * e2x - d.x * e2z, pz = d.x * e2y - d.y * e2x;
+  float4 det = e1x * px + e1y * py + e1z * pz;
+  float4 inv = 1.0f / det;
+  float4 sx = o.x - v0x, sy = o.y - v0y, sz = o.z - v0z;
+  float4 uu = (sx * px + sy * py + sz * pz) * inv;
+  float4 qx = sy * e1z - sz * e1y, qy = sz * e1x - sx * e1z, qz = sx * e1y - sy * e1x;
+  float4 vv = (d.x * qx + d.y * qy + d.z * qz) * inv;
+  float4 tt = (e2x * qx + e2y * qy + e2z * qz) * inv;
+  int4 ok = (fabs(det) >= (float4)(1e-30f)) & (uu >= 0.0f) & (uu <= 1.0f) & (vv >= 0.0f) & (uu + vv <= 1.0f) &
+            (tt > tmin) & (tt < tmax);
+  int4 bits = ok & (int4)(1, 2, 4, 8);
+  *t = tt; *u = uu; *v = vv; *id = as_uint4(q[9]);
+  return bits.x | bits.y | bits.z | bits.w;
 }
 
 // Shared traversal. any_hit: stop at the first (unmasked) hit.
@@ -110,8 +112,8 @@ inline bool gi_bvh_trace(const GiBvh* b, float3 o, float3 d, float tmin, float t
       float8 tfx = vload8(0, n + fx) * inv.x - oi.x;
       float8 tfy = vload8(0, n + fy) * inv.y - oi.y;
       float8 tfz = vload8(0, n + fz) * inv.z - oi.z;
-      float8 tn = fmax(fmax(tnx, tny), fmax(tnz, (float8)(tmin)));
-      float8 tf = fmin(fmin(tfx, tfy), fmin(tfz, (float8)(tmax)));
+      float8 tn = max(max(tnx, tny), max(tnz, (float8)(tmin)));
+      float8 tf = min(min(tfx, tfy), min(tfz, (float8)(tmax)));
       int8 bits = (tn <= tf) & bitv;
       int4 b4 = bits.lo | bits.hi;
       int2 b2 = b4.lo | b4.hi;
@@ -163,17 +165,28 @@ inline bool gi_bvh_trace(const GiBvh* b, float3 o, float3 d, float tmin, float t
       }
     } else {
       uint first = node & 0x07FFFFFFu, count = ((node >> 27) & 15u) + 1u;
-      for (uint s = first; s < first + count; ++s) {
-        float t, u, v;
-        uint tag;
-        if (gi_bvh_tri(b, s, o, d, tmin, tmax, &t, &u, &v, &tag)) {
-          uint prim = tag & ~GI_BVH_ALPHA_BIT;
-          if ((tag & GI_BVH_ALPHA_BIT) && gi_bvh_cut_out(b, prim, u, v)) continue;
-          tmax = t;
-          hit->t = t; hit->u = u; hit->v = v; hit->prim = prim;
+      for (uint p = first; p < first + count; ++p) {
+        float4 t4, u4, v4;
+        uint4 id4;
+        int m = gi_bvh_pack(b, p, o, d, tmin, tmax, &t4, &u4, &v4, &id4);
+        if (m == 0) continue;
+        float ta[4], ua[4], va[4];
+        uint ia[4];
+        vstore4(t4, 0, ta); vstore4(u4, 0, ua); vstore4(v4, 0, va); vstore4(id4, 0, ia);
+        // Nearest lane first; an alpha-masked lane that is cut away gives way to the next.
+        while (m) {
+          int best = 31 - clz(m & -m);
+          for (int l = 0; l < 4; ++l)
+            if ((m >> l & 1) && ta[l] < ta[best]) best = l;
+          m &= ~(1 << best);
+          uint prim = ia[best] & ~GI_BVH_ALPHA_BIT;
+          if ((ia[best] & GI_BVH_ALPHA_BIT) && gi_bvh_cut_out(b, prim, ua[best], va[best])) continue;
+          tmax = ta[best];
+          hit->t = ta[best]; hit->u = ua[best]; hit->v = va[best]; hit->prim = prim;
           found = true;
-          if (any_hit) return true;
+          break;
         }
+        if (found && any_hit) return true;
       }
     }
     // Pop the next entry that can still hold a nearer hit.

@@ -160,9 +160,6 @@ struct Builder {
   }
 };
 
-uint32_t leafRef(const Node2& n) {
-  return kBvhLeafBit | ((n.count - 1) << 27) | n.first;
-}
 
 // Collapses the binary tree into 8-wide nodes: each wide node takes its binary node's two
 // children and keeps opening the inner child with the largest surface area (the one most likely
@@ -170,7 +167,29 @@ uint32_t leafRef(const Node2& n) {
 struct Collapser {
   const std::vector<Node2>& n2;
   std::vector<GiBvhNode>& out;
+  std::vector<GiBvhTriPack>& packs;
+  const std::vector<glm::vec4>& tris;  // 3 per slot, leaf order
   uint32_t leaves = 0;
+
+  // A leaf's triangles as packs of 4 (the last one padded with lanes that never hit).
+  uint32_t leafRef(const Node2& n) {
+    uint32_t first = uint32_t(packs.size());
+    for (uint32_t s0 = n.first; s0 < n.first + n.count; s0 += 4) {
+      GiBvhTriPack p{};
+      for (int l = 0; l < 4; ++l) {
+        uint32_t s = s0 + uint32_t(l);
+        if (s >= n.first + n.count) { p.id[l] = 0xFFFFFFFFu; continue; }
+        const glm::vec4 &v0 = tris[3 * s], &e1 = tris[3 * s + 1], &e2 = tris[3 * s + 2];
+        p.v0x[l] = v0.x; p.v0y[l] = v0.y; p.v0z[l] = v0.z;
+        p.e1x[l] = e1.x; p.e1y[l] = e1.y; p.e1z[l] = e1.z;
+        p.e2x[l] = e2.x; p.e2y[l] = e2.y; p.e2z[l] = e2.z;
+        std::memcpy(&p.id[l], &v0.w, 4);
+      }
+      packs.push_back(p);
+    }
+    uint32_t count = uint32_t(packs.size()) - first;
+    return kBvhLeafBit | ((count - 1) << 27) | first;
+  }
 
   void emit(uint32_t slot, int bin) {
     std::vector<int> kids;
@@ -278,22 +297,6 @@ Bvh buildBvh(const Scene& scene, const BvhBuildOptions& options) {
     bvh.stats.sahCost = cost;
   }
 
-  // Wide nodes. An empty scene gets one root with 8 empty children.
-  bvh.nodes.resize(1);
-  if (n2.empty()) {
-    GiBvhNode& r = bvh.nodes[0];
-    for (int i = 0; i < 8; ++i) {
-      r.lo_x[i] = r.lo_y[i] = r.lo_z[i] = INFINITY;
-      r.hi_x[i] = r.hi_y[i] = r.hi_z[i] = -INFINITY;
-      r.child[i] = kBvhEmpty;
-    }
-  } else {
-    Collapser c{n2, bvh.nodes};
-    c.emit(0, 0);
-    bvh.stats.leaves = c.leaves;
-  }
-  bvh.stats.innerNodes = uint32_t(bvh.nodes.size());
-
   // Triangle slots in leaf order (the index array after partitioning is exactly that order).
   bvh.tris.resize(3 * n);
   bvh.triIndex = idx;
@@ -311,6 +314,22 @@ Bvh buildBvh(const Scene& scene, const BvhBuildOptions& options) {
     bvh.tris[3 * s + 1] = glm::vec4(v1 - v0, 0.0f);
     bvh.tris[3 * s + 2] = glm::vec4(v2 - v0, 0.0f);
   }
+  // Wide nodes. An empty scene gets one root with 8 empty children.
+  bvh.nodes.resize(1);
+  if (n2.empty()) {
+    GiBvhNode& r = bvh.nodes[0];
+    for (int i = 0; i < 8; ++i) {
+      r.lo_x[i] = r.lo_y[i] = r.lo_z[i] = INFINITY;
+      r.hi_x[i] = r.hi_y[i] = r.hi_z[i] = -INFINITY;
+      r.child[i] = kBvhEmpty;
+    }
+  } else {
+    Collapser c{n2, bvh.nodes, bvh.packs, bvh.tris};
+    c.emit(0, 0);
+    bvh.stats.leaves = c.leaves;
+  }
+  bvh.stats.innerNodes = uint32_t(bvh.nodes.size());
+
   bvh.stats.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return bvh;
 }
@@ -322,7 +341,8 @@ DeviceBvh::DeviceBvh(cl::Context& ctx, const Scene& scene, const DeviceScene& de
   stats_ = bvh.stats;
   nodeCount_ = uint32_t(bvh.nodes.size());
   nodes_ = ctx.upload(bvh.nodes, "BVH nodes");
-  tris_ = ctx.upload(bvh.tris, "BVH triangles");
+  if (bvh.packs.empty()) bvh.packs.resize(1);  // a valid buffer for the empty scene
+  tris_ = ctx.upload(bvh.packs, "BVH triangle packs");
 }
 
 unsigned DeviceBvh::setArgs(cl::Kernel& k, unsigned i) const {

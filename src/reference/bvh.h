@@ -10,13 +10,14 @@
 //
 // Device layout (kernels/reference/bvh_traverse.h reads it):
 //   nodes: GiBvhNode (256 bytes): lo/hi of the 8 child boxes per axis, the 8 child references.
-//          A child reference is an inner node index, a leaf (bit 31 set, triangle count − 1 in
-//          bits 27..30, first triangle slot in bits 0..26) or GI_BVH_EMPTY (empty box, never hit).
+//          A child reference is an inner node index, a leaf (bit 31 set, pack count − 1 in
+//          bits 27..30, first triangle pack in bits 0..26) or GI_BVH_EMPTY (empty box, never hit).
 //          Node 0 is the root and is always an inner node.
-//   tris:  3 float4 per triangle slot in leaf order: v0 (w = original triangle index as uint bits,
-//          bit 31 set when the material is alpha-masked), e1 = v1 − v0, e2 = v2 − v0, so the
-//          Möller–Trumbore test needs no index indirection and the traversal knows without a
-//          material fetch whether an alpha test is needed.
+//   packs: GiBvhTriPack (160 bytes): 4 triangles of a leaf as structure-of-arrays v0, e1 = v1 − v0,
+//          e2 = v2 − v0 per axis, so one float4 Möller–Trumbore test checks 4 triangles; id = the
+//          original triangle index, bit 31 set when its material is alpha-masked (the traversal
+//          then knows without a material fetch whether an alpha test is needed); unused lanes
+//          have id 0xFFFFFFFF and zero edges (never hit).
 //
 // Not handled: instancing (the scene is flattened), motion, refitting (static scenes only), more
 // than 2^27 triangles or 2^31 − 1 triangles with the alpha flag (checked, throws gi::Error).
@@ -44,6 +45,12 @@ struct GiBvhNode {
 };
 static_assert(sizeof(GiBvhNode) == 256, "GiBvhNode layout");
 
+struct GiBvhTriPack {
+  float v0x[4], v0y[4], v0z[4], e1x[4], e1y[4], e1z[4], e2x[4], e2y[4], e2z[4];
+  uint32_t id[4];
+};
+static_assert(sizeof(GiBvhTriPack) == 160, "GiBvhTriPack layout");
+
 struct BvhBuildOptions {
   int maxLeafSize = 4;   // leaves hold at most this many triangles where a split exists
   int bins = 16;         // SAH bins per axis
@@ -59,7 +66,8 @@ struct BvhStats {
 // The host-side BVH in the device layout.
 struct Bvh {
   std::vector<GiBvhNode> nodes;
-  std::vector<glm::vec4> tris;       // 3 per triangle slot (v0+index, e1, e2)
+  std::vector<GiBvhTriPack> packs;   // what leaves reference (the device layout)
+  std::vector<glm::vec4> tris;       // 3 per triangle slot in leaf order (v0+tagged index, e1, e2)
   std::vector<uint32_t> triIndex;    // original triangle index of each slot
   BvhStats stats;
 };
