@@ -25,6 +25,31 @@ typedef ulong16 ulongV;
 #define vloadV vload16
 #define vstoreV vstore16
 #define GI_ANY(m) any(m)
+#define GI_ALL(m) all(m)
+#define GI_GATHER(V, p, i)                                                                                    \
+  ((V)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], (p)[(i).s6],     \
+             (p)[(i).s7], (p)[(i).s8], (p)[(i).s9], (p)[(i).sa], (p)[(i).sb], (p)[(i).sc], (p)[(i).sd],     \
+             (p)[(i).se], (p)[(i).sf]))
+// GI_VW float4 values (array of structures) <-> four floatV (structure of arrays).
+#define GI_AOS4_LOAD(p, X, Y, Z, W)                                                                    \
+  {                                                                                                    \
+    float16 a_ = vload16(0, p), b_ = vload16(1, p), c_ = vload16(2, p), d_ = vload16(3, p);            \
+    X = (float16)(a_.s048c, b_.s048c, c_.s048c, d_.s048c);                                             \
+    Y = (float16)(a_.s159d, b_.s159d, c_.s159d, d_.s159d);                                             \
+    Z = (float16)(a_.s26ae, b_.s26ae, c_.s26ae, d_.s26ae);                                             \
+    W = (float16)(a_.s37bf, b_.s37bf, c_.s37bf, d_.s37bf);                                             \
+  }
+#define GI_AOS4_STORE(p, X, Y, Z, W)                                                                         \
+  {                                                                                                          \
+    vstore16((float16)(X.s0, Y.s0, Z.s0, W.s0, X.s1, Y.s1, Z.s1, W.s1, X.s2, Y.s2, Z.s2, W.s2, X.s3, Y.s3,   \
+                       Z.s3, W.s3), 0, p);                                                                   \
+    vstore16((float16)(X.s4, Y.s4, Z.s4, W.s4, X.s5, Y.s5, Z.s5, W.s5, X.s6, Y.s6, Z.s6, W.s6, X.s7, Y.s7,   \
+                       Z.s7, W.s7), 1, p);                                                                   \
+    vstore16((float16)(X.s8, Y.s8, Z.s8, W.s8, X.s9, Y.s9, Z.s9, W.s9, X.sa, Y.sa, Z.sa, W.sa, X.sb, Y.sb,   \
+                       Z.sb, W.sb), 2, p);                                                                   \
+    vstore16((float16)(X.sc, Y.sc, Z.sc, W.sc, X.sd, Y.sd, Z.sd, W.sd, X.se, Y.se, Z.se, W.se, X.sf, Y.sf,   \
+                       Z.sf, W.sf), 3, p);                                                                   \
+  }
 #elif GI_VW == 8
 typedef float8 floatV;
 typedef int8 intV;
@@ -42,6 +67,24 @@ typedef ulong8 ulongV;
 #define vloadV vload8
 #define vstoreV vstore8
 #define GI_ANY(m) any(m)
+#define GI_ALL(m) all(m)
+#define GI_GATHER(V, p, i) \
+  ((V)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], (p)[(i).s6], (p)[(i).s7]))
+#define GI_AOS4_LOAD(p, X, Y, Z, W)                                  \
+  {                                                                  \
+    float16 a_ = vload16(0, p), b_ = vload16(1, p);                  \
+    X = (float8)(a_.s048c, b_.s048c);                                \
+    Y = (float8)(a_.s159d, b_.s159d);                                \
+    Z = (float8)(a_.s26ae, b_.s26ae);                                \
+    W = (float8)(a_.s37bf, b_.s37bf);                                \
+  }
+#define GI_AOS4_STORE(p, X, Y, Z, W)                                                                         \
+  {                                                                                                          \
+    vstore16((float16)(X.s0, Y.s0, Z.s0, W.s0, X.s1, Y.s1, Z.s1, W.s1, X.s2, Y.s2, Z.s2, W.s2, X.s3, Y.s3,   \
+                       Z.s3, W.s3), 0, p);                                                                   \
+    vstore16((float16)(X.s4, Y.s4, Z.s4, W.s4, X.s5, Y.s5, Z.s5, W.s5, X.s6, Y.s6, Z.s6, W.s6, X.s7, Y.s7,   \
+                       Z.s7, W.s7), 1, p);                                                                   \
+  }
 #elif GI_VW == 1
 typedef float floatV;
 typedef int intV;
@@ -59,6 +102,53 @@ typedef ulong ulongV;
 #define vloadV(i, p) ((p)[i])
 #define vstoreV(v, i, p) ((p)[i] = (v))
 #define GI_ANY(m) (m)
+#define GI_ALL(m) (m)
+#define GI_GATHER(V, p, i) ((V)((p)[i]))
+#define GI_AOS4_LOAD(p, X, Y, Z, W) \
+  {                                 \
+    float4 v_ = vload4(0, p);       \
+    X = v_.x;                       \
+    Y = v_.y;                       \
+    Z = v_.z;                       \
+    W = v_.w;                       \
+  }
+#define GI_AOS4_STORE(p, X, Y, Z, W) \
+  { vstore4((float4)(X, Y, Z, W), 0, p); }
 #else
 #error "GI_VW must be 1, 8 or 16"
 #endif
+
+// Lane-wise helpers (structure of arrays). GI_SEL(a, b, c): b where c is true, else a.
+#if GI_VW == 1
+#define GI_SEL(a, b, c) ((c) ? (b) : (a))
+#else
+#define GI_SEL(a, b, c) select(a, b, c)
+#endif
+
+typedef struct {
+  floatV x, y, z;
+} float3V;
+
+inline float3V f3v(floatV x, floatV y, floatV z) {
+  float3V r;
+  r.x = x;
+  r.y = y;
+  r.z = z;
+  return r;
+}
+inline floatV dotV(float3V a, float3V b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline float3V addV(float3V a, float3V b) { return f3v(a.x + b.x, a.y + b.y, a.z + b.z); }
+inline float3V subV(float3V a, float3V b) { return f3v(a.x - b.x, a.y - b.y, a.z - b.z); }
+inline float3V scaleV(float3V a, floatV s) { return f3v(a.x * s, a.y * s, a.z * s); }
+inline float3V negV(float3V a) { return f3v(-a.x, -a.y, -a.z); }
+inline float3V crossV(float3V a, float3V b) {
+  return f3v(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+inline float3V selV(float3V a, float3V b, intV c) {
+  return f3v(GI_SEL(a.x, b.x, c), GI_SEL(a.y, b.y, c), GI_SEL(a.z, b.z, c));
+}
+// safe_normalize() lane-wise.
+inline float3V safe_normalizeV(float3V v, float3V fallback) {
+  floatV l2 = dotV(v, v);
+  return selV(fallback, scaleV(v, rsqrt(l2)), l2 > 1e-30f);
+}

@@ -6,6 +6,7 @@
 #include "common/lights.h"
 #include "common/material.h"
 #include "raster/view.h"
+#include "common/vector_width.h"
 
 typedef struct {
   float3 position;
@@ -59,9 +60,81 @@ inline SurfaceHit resolve_hit(const GiView* view, int px, int py, uint triangle,
   return h;
 }
 
-// Camera G-buffer, one work-item per pixel. Planes (structure of arrays, see src/raster/gbuffer.h):
-// position (w = 1 surface, 0 background), geometric and shading normals, diffuse albedo with
-// metallic in w, specular F0 with roughness in w, emission, instance id.
+// ---- Lane-wise forms for the camera G-buffer (GI_VW adjacent pixels of a row per work-item) ----
+// The same formulas as resolve_hit(), sample_texture(), eval_material() and apply_normal_map(),
+// written over floatV lanes with gathers for per-triangle, per-material and per-texel data.
+
+typedef struct {
+  floatV x, y, z, w;
+} float4V;
+
+// sample_texture() for per-lane texture indices (lanes with index < 0 are not used by callers
+// and read texture 0; callers only come here when some lane has a texture).
+inline float4V sample_textureV(global const GiTexture* table, global const uchar4* texels, intV index, floatV u,
+                               floatV v, floatV lod) {
+  global const int* tab = (global const int*)table;
+  intV ti = max(index, 0) * 8;  // GiTexture is 8 ints
+  uintV offset = as_uintV(GI_GATHER(intV, tab, ti));
+  intV w = GI_GATHER(intV, tab, ti + 1), h = GI_GATHER(intV, tab, ti + 2);
+  intV levels = GI_GATHER(intV, tab, ti + 3), srgb = GI_GATHER(intV, tab, ti + 4);
+  intV level = clamp(convert_intV(lod + 0.5f), 0, levels - 1);
+  // Level offsets: step every lane up to the largest level among the lanes.
+  int top = 0;
+#if GI_VW == 1
+  top = level;
+#else
+  {
+    int lv[GI_VW];
+    vstoreV(level, 0, lv);
+    for (int l = 0; l < GI_VW; ++l) top = max(top, lv[l]);
+  }
+#endif
+  for (int l = 0; l < top; ++l) {
+    intV m = (intV)(l) < level;
+    offset += as_uintV(GI_SEL((intV)(0), w * h, m));
+    w = GI_SEL(w, max(1, w >> 1), m);
+    h = GI_SEL(h, max(1, h >> 1), m);
+  }
+  floatV wf = convert_floatV(w), hf = convert_floatV(h);
+  floatV fx = u * wf - 0.5f, fy = v * hf - 0.5f;
+  intV bad = !isfinite(fx) | !isfinite(fy);
+  fx = GI_SEL(fx, (floatV)(0.0f), bad);
+  fy = GI_SEL(fy, (floatV)(0.0f), bad);
+  fx -= floor(fx / wf) * wf;
+  fy -= floor(fy / hf) * hf;
+  floatV x0f = floor(fx), y0f = floor(fy);
+  floatV ax = GI_SEL(fx - x0f, (floatV)(0.0f), bad), ay = GI_SEL(fy - y0f, (floatV)(0.0f), bad);
+  intV x0 = min(convert_intV(x0f), w - 1), y0 = min(convert_intV(y0f), h - 1);
+  intV x1 = GI_SEL(x0 + 1, (intV)(0), x0 + 1 == w), y1 = GI_SEL(y0 + 1, (intV)(0), y0 + 1 == h);
+  global const uint* px = (global const uint*)texels;
+  uintV c00 = GI_GATHER(uintV, px, offset + as_uintV(y0 * w + x0));
+  uintV c10 = GI_GATHER(uintV, px, offset + as_uintV(y0 * w + x1));
+  uintV c01 = GI_GATHER(uintV, px, offset + as_uintV(y1 * w + x0));
+  uintV c11 = GI_GATHER(uintV, px, offset + as_uintV(y1 * w + x1));
+  intV isSrgb = srgb != 0;
+  bool anySrgb = GI_ANY(isSrgb);
+  float4V r;
+#define GI_CH(c, sh) convert_intV(((c) >> (sh)) & 0xFFu)
+#define GI_DECODE(c, sh) \
+  (anySrgb ? GI_SEL(convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f), GI_GATHER(floatV, GI_SRGB_TO_LINEAR, GI_CH(c, sh)), isSrgb) \
+           : convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f))
+#define GI_BILERP(out, sh, DEC) \
+  out = mix(mix(DEC(c00, sh), DEC(c10, sh), ax), mix(DEC(c01, sh), DEC(c11, sh), ax), ay);
+#define GI_LINEAR(c, sh) (convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f))
+  GI_BILERP(r.x, 0, GI_DECODE)
+  GI_BILERP(r.y, 8, GI_DECODE)
+  GI_BILERP(r.z, 16, GI_DECODE)
+  GI_BILERP(r.w, 24, GI_LINEAR)
+#undef GI_CH
+#undef GI_DECODE
+#undef GI_BILERP
+#undef GI_LINEAR
+  return r;
+}
+
+// Camera G-buffer, GI_VW pixels of a row per work-item. Planes (structure of arrays, see
+// src/raster/gbuffer.h): position (w = 1 surface, 0 background), geometric and shading normals,
+// diffuse albedo with metallic in w, specular F0 with roughness in w, emission, instance id.
 kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global const float4* positions,
                             global const float4* normals, global const float4* tangents, global const float2* uvs,
                             global const uint4* triangles, global const uint* triangleInstance,
@@ -69,31 +142,196 @@ kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global 
                             global const uchar4* texels, global float4* outPosition, global float4* outGeoNormal,
                             global float4* outNormal, global float4* outAlbedo, global float4* outSpecular,
                             global float4* outEmission, global uint* outInstance) {
-  int px = get_global_id(0), py = get_global_id(1);
-  if (px >= view.width || py >= view.height) return;
-  size_t i = (size_t)py * view.width + px;
-  uint t = visTriangle[i];
-  if (t == GI_INVALID_ID) {
-    outPosition[i] = (float4)(0.0f);
-    outGeoNormal[i] = (float4)(0.0f);
-    outNormal[i] = (float4)(0.0f);
-    outAlbedo[i] = (float4)(0.0f);
-    outSpecular[i] = (float4)(0.0f);
-    outEmission[i] = (float4)(0.0f);
-    outInstance[i] = GI_INVALID_ID;
+  int px0 = get_global_id(0) * GI_VW, py = get_global_id(1);
+  if (px0 >= view.width || py >= view.height) return;
+  size_t i = (size_t)py * view.width + px0;
+  int valid = min(GI_VW, view.width - px0);
+  uintV t;
+  if (valid == GI_VW) {
+    t = vloadV(0, visTriangle + i);
+  } else {
+    uint tt[GI_VW];
+    for (int l = 0; l < GI_VW; ++l) tt[l] = l < valid ? visTriangle[i + l] : GI_INVALID_ID;
+    t = vloadV(0, tt);
+  }
+  intV surface = t != (uintV)(GI_INVALID_ID);
+  floatV zero = (floatV)(0.0f);
+  float tmp[4 * GI_VW];
+#define GI_STORE_PLANE(plane, X, Y, Z, W)                                       \
+  if (valid == GI_VW) {                                                         \
+    GI_AOS4_STORE((global float*)(plane + i), X, Y, Z, W)                       \
+  } else {                                                                      \
+    GI_AOS4_STORE(tmp, X, Y, Z, W)                                              \
+    for (int l = 0; l < valid; ++l) plane[i + l] = vload4(l, tmp);              \
+  }
+  if (!GI_ANY(surface)) {
+    GI_STORE_PLANE(outPosition, zero, zero, zero, zero)
+    GI_STORE_PLANE(outGeoNormal, zero, zero, zero, zero)
+    GI_STORE_PLANE(outNormal, zero, zero, zero, zero)
+    GI_STORE_PLANE(outAlbedo, zero, zero, zero, zero)
+    GI_STORE_PLANE(outSpecular, zero, zero, zero, zero)
+    GI_STORE_PLANE(outEmission, zero, zero, zero, zero)
+    for (int l = 0; l < valid; ++l) outInstance[i + l] = GI_INVALID_ID;
     return;
   }
-  SurfaceHit h = resolve_hit(&view, px, py, t, positions, normals, tangents, uvs, triangles, materials, textures);
-  global const GiMaterial* m = &materials[h.material];
-  SurfaceSample s = eval_material(m, textures, texels, h.uv, h.lod);
-  float3 n = apply_normal_map(m, textures, texels, h.uv, h.lod, h.normal, h.tangent);
-  outPosition[i] = (float4)(h.position, 1.0f);
-  outGeoNormal[i] = (float4)(h.geoNormal, 0.0f);
-  outNormal[i] = (float4)(n, 0.0f);
-  outAlbedo[i] = (float4)(s.diffuse, s.metallic);
-  outSpecular[i] = (float4)(s.f0, s.roughness);
-  outEmission[i] = (float4)(s.emission, 0.0f);
-  outInstance[i] = triangleInstance[t];
+  // Background lanes take triangle 0 for the gathers (their results are discarded).
+  uintV tg = GI_SEL((uintV)(0), t, surface);
+  global const uint* triU = (global const uint*)triangles;
+  uintV t4 = tg * 4u;
+  uintV i0 = GI_GATHER(uintV, triU, t4), i1 = GI_GATHER(uintV, triU, t4 + 1u), i2 = GI_GATHER(uintV, triU, t4 + 2u);
+  uintV mat = GI_GATHER(uintV, triU, t4 + 3u);
+#define GI_FETCH3(buf, idx) \
+  f3v(GI_GATHER(floatV, buf, (idx) * 4u), GI_GATHER(floatV, buf, (idx) * 4u + 1u), GI_GATHER(floatV, buf, (idx) * 4u + 2u))
+  global const float* posF = (global const float*)positions;
+  global const float* nrmF = (global const float*)normals;
+  global const float* tanF = (global const float*)tangents;
+  global const float* uvF = (global const float*)uvs;
+  float3V p0 = GI_FETCH3(posF, i0), p1 = GI_FETCH3(posF, i1), p2 = GI_FETCH3(posF, i2);
+
+  // view_pixel_ray() per lane.
+  floatV pxf = convert_floatV(px0 + GI_LANES) + 0.5f;
+  floatV nx = pxf / (float)view.width * 2.0f - 1.0f;
+  float ny = 1.0f - ((float)py + 0.5f) / (float)view.height * 2.0f;
+  const float* M = view.inv_view_proj;
+  // mat4_mul(M, (nx, ny, ±1, 1)) = col0·nx + col1·ny + col2·(±1) + col3.
+#define GI_INV(r, zs) (M[r] * nx + M[4 + r] * ny + M[8 + r] * (zs) + M[12 + r])
+  floatV anw = GI_INV(3, -1.0f), afw = GI_INV(3, 1.0f);
+  float3V a = f3v(GI_INV(0, -1.0f) / anw, GI_INV(1, -1.0f) / anw, GI_INV(2, -1.0f) / anw);
+  float3V b = f3v(GI_INV(0, 1.0f) / afw, GI_INV(1, 1.0f) / afw, GI_INV(2, 1.0f) / afw);
+#undef GI_INV
+  float3V o = view.orthographic ? a : f3v((floatV)(view.eye[0]), (floatV)(view.eye[1]), (floatV)(view.eye[2]));
+  float3V d = subV(b, a);
+  d = scaleV(d, rsqrt(dotV(d, d)));
+
+  // ray_triangle_barycentrics() per lane.
+  float3V e1 = subV(p1, p0), e2 = subV(p2, p0);
+  float3V pv = crossV(d, e2);
+  floatV det = dotV(e1, pv);
+  floatV inv = GI_SEL((floatV)(0.0f), 1.0f / det, fabs(det) > 1e-30f);
+  float3V tv = subV(o, p0);
+  floatV b1 = dotV(tv, pv) * inv;
+  float3V qv = crossV(tv, e1);
+  floatV b2 = dotV(d, qv) * inv;
+  floatV th = dotV(e2, qv) * inv;
+  floatV b0 = 1.0f - b1 - b2;
+  float3V position = addV(o, scaleV(d, th));
+  float3V fn = crossV(e1, e2);
+  floatV worldArea2 = sqrt(dotV(fn, fn));
+  float3V geoN = selV(f3v(zero, zero, (floatV)(1.0f)), f3v(fn.x / worldArea2, fn.y / worldArea2, fn.z / worldArea2), worldArea2 > 0.0f);
+  float3V n0 = GI_FETCH3(nrmF, i0), n1 = GI_FETCH3(nrmF, i1), n2 = GI_FETCH3(nrmF, i2);
+  float3V nrm = safe_normalizeV(addV(addV(scaleV(n0, b0), scaleV(n1, b1)), scaleV(n2, b2)), geoN);
+  nrm = selV(nrm, negV(nrm), dotV(nrm, geoN) < 0.0f);
+  intV back = dotV(geoN, d) > 0.0f;
+  geoN = selV(geoN, negV(geoN), back);
+  nrm = selV(nrm, negV(nrm), back);
+  float4V tg0, tg1, tg2;
+#define GI_FETCH4(out, idx)                                                                       \
+  out.x = GI_GATHER(floatV, tanF, (idx) * 4u); out.y = GI_GATHER(floatV, tanF, (idx) * 4u + 1u); \
+  out.z = GI_GATHER(floatV, tanF, (idx) * 4u + 2u); out.w = GI_GATHER(floatV, tanF, (idx) * 4u + 3u);
+  GI_FETCH4(tg0, i0)
+  GI_FETCH4(tg1, i1)
+  GI_FETCH4(tg2, i2)
+#undef GI_FETCH4
+  float4V tng;
+  tng.x = b0 * tg0.x + b1 * tg1.x + b2 * tg2.x;
+  tng.y = b0 * tg0.y + b1 * tg1.y + b2 * tg2.y;
+  tng.z = b0 * tg0.z + b1 * tg1.z + b2 * tg2.z;
+  tng.w = b0 * tg0.w + b1 * tg1.w + b2 * tg2.w;
+  floatV u0 = GI_GATHER(floatV, uvF, i0 * 2u), v0 = GI_GATHER(floatV, uvF, i0 * 2u + 1u);
+  floatV u1 = GI_GATHER(floatV, uvF, i1 * 2u), v1 = GI_GATHER(floatV, uvF, i1 * 2u + 1u);
+  floatV u2 = GI_GATHER(floatV, uvF, i2 * 2u), v2 = GI_GATHER(floatV, uvF, i2 * 2u + 1u);
+  floatV u = b0 * u0 + b1 * u1 + b2 * u2, v = b0 * v0 + b1 * v1 + b2 * v2;
+  floatV cosView = fabs(dotV(geoN, d));
+  // Level of detail (see resolve_hit()).
+  floatV du1x = u1 - u0, du1y = v1 - v0, du2x = u2 - u0, du2y = v2 - v0;
+  floatV uvArea2 = fabs(du1x * du2y - du2x * du1y);
+  const float* Vm = view.view;
+  floatV z = -(Vm[2] * position.x + Vm[6] * position.y + Vm[10] * position.z + Vm[14]);
+  floatV footprint = view.orthographic ? (floatV)(view.texel_world_size) : view.texel_world_size * z;
+  floatV pixelArea2 = worldArea2 * fmax(cosView, 1e-3f) / fmax(footprint * footprint, 1e-30f);
+  // Material fields (GiMaterial is 20 words).
+  global const float* mf = (global const float*)materials;
+  global const int* mi = (global const int*)materials;
+  uintV m20 = mat * 20u;
+  intV baseTex = GI_GATHER(intV, mi, m20 + 12u), mrTex = GI_GATHER(intV, mi, m20 + 13u);
+  intV normalTex = GI_GATHER(intV, mi, m20 + 14u), emTex = GI_GATHER(intV, mi, m20 + 15u);
+  intV lodTex = GI_SEL(normalTex, baseTex, baseTex >= 0);
+  // texture_lod() per lane.
+  floatV lod;
+  {
+    global const int* tab = (global const int*)textures;
+    intV ti = max(lodTex, 0) * 8;
+    intV hasLod = (lodTex >= 0) & (pixelArea2 > 0.0f) & surface;
+    floatV tw = GI_ANY(hasLod) ? convert_floatV(GI_GATHER(intV, tab, ti + 1)) : (floatV)(1.0f);
+    floatV tht = GI_ANY(hasLod) ? convert_floatV(GI_GATHER(intV, tab, ti + 2)) : (floatV)(1.0f);
+    floatV texelArea = uvArea2 * tw * tht;
+    lod = GI_SEL((floatV)(0.0f), 0.5f * log2(fmax(texelArea / pixelArea2, 1e-8f)), hasLod);
+  }
+  // eval_material() per lane.
+  float4V base;
+  base.x = GI_GATHER(floatV, mf, m20);
+  base.y = GI_GATHER(floatV, mf, m20 + 1u);
+  base.z = GI_GATHER(floatV, mf, m20 + 2u);
+  base.w = GI_GATHER(floatV, mf, m20 + 3u);
+  intV hasBase = (baseTex >= 0) & surface;
+  if (GI_ANY(hasBase)) {
+    float4V c = sample_textureV(textures, texels, GI_SEL((intV)(-1), baseTex, hasBase), u, v, lod);
+    base.x *= GI_SEL((floatV)(1.0f), c.x, hasBase);
+    base.y *= GI_SEL((floatV)(1.0f), c.y, hasBase);
+    base.z *= GI_SEL((floatV)(1.0f), c.z, hasBase);
+    base.w *= GI_SEL((floatV)(1.0f), c.w, hasBase);
+  }
+  floatV metallic = GI_GATHER(floatV, mf, m20 + 7u), roughness = GI_GATHER(floatV, mf, m20 + 8u);
+  intV hasMr = (mrTex >= 0) & surface;
+  if (GI_ANY(hasMr)) {
+    float4V mr = sample_textureV(textures, texels, mrTex, u, v, lod);
+    roughness = GI_SEL(roughness, roughness * mr.y, hasMr);
+    metallic = GI_SEL(metallic, metallic * mr.z, hasMr);
+  }
+  metallic = clamp(metallic, 0.0f, 1.0f);
+  roughness = clamp(roughness, 0.0f, 1.0f);
+  float3V diffuse = f3v(base.x * (1.0f - metallic), base.y * (1.0f - metallic), base.z * (1.0f - metallic));
+  float3V f0 = f3v(mix((floatV)(0.04f), base.x, metallic), mix((floatV)(0.04f), base.y, metallic),
+                   mix((floatV)(0.04f), base.z, metallic));
+  float3V emission = f3v(GI_GATHER(floatV, mf, m20 + 4u), GI_GATHER(floatV, mf, m20 + 5u), GI_GATHER(floatV, mf, m20 + 6u));
+  intV hasEm = (emTex >= 0) & surface;
+  if (GI_ANY(hasEm)) {
+    float4V e = sample_textureV(textures, texels, emTex, u, v, lod);
+    emission = selV(emission, f3v(emission.x * e.x, emission.y * e.y, emission.z * e.z), hasEm);
+  }
+  // apply_normal_map() per lane.
+  float3V shading = nrm;
+  float3V t3 = f3v(tng.x, tng.y, tng.z);
+  intV hasNormalMap = (normalTex >= 0) & (dotV(t3, t3) >= 1e-12f) & surface;
+  if (GI_ANY(hasNormalMap)) {
+    float3V tt = safe_normalizeV(subV(t3, scaleV(nrm, dotV(nrm, t3))), f3v((floatV)(1.0f), zero, zero));
+    float3V bt = scaleV(crossV(nrm, tt), GI_SEL((floatV)(1.0f), (floatV)(-1.0f), tng.w < 0.0f));
+    float4V tn4 = sample_textureV(textures, texels, normalTex, u, v, lod);
+    floatV normalScale = GI_GATHER(floatV, mf, m20 + 10u);
+    floatV tnx = (tn4.x * 2.0f - 1.0f) * normalScale, tny = (tn4.y * 2.0f - 1.0f) * normalScale;
+    floatV tnz = tn4.z * 2.0f - 1.0f;
+    float3V mapped = safe_normalizeV(addV(addV(scaleV(tt, tnx), scaleV(bt, tny)), scaleV(nrm, tnz)), nrm);
+    shading = selV(nrm, mapped, hasNormalMap);
+  }
+  floatV one = (floatV)(1.0f);
+#define GI_S(x) GI_SEL(zero, x, surface)
+  GI_STORE_PLANE(outPosition, GI_S(position.x), GI_S(position.y), GI_S(position.z), GI_S(one))
+  GI_STORE_PLANE(outGeoNormal, GI_S(geoN.x), GI_S(geoN.y), GI_S(geoN.z), zero)
+  GI_STORE_PLANE(outNormal, GI_S(shading.x), GI_S(shading.y), GI_S(shading.z), zero)
+  GI_STORE_PLANE(outAlbedo, GI_S(diffuse.x), GI_S(diffuse.y), GI_S(diffuse.z), GI_S(metallic))
+  GI_STORE_PLANE(outSpecular, GI_S(f0.x), GI_S(f0.y), GI_S(f0.z), GI_S(roughness))
+  GI_STORE_PLANE(outEmission, GI_S(emission.x), GI_S(emission.y), GI_S(emission.z), zero)
+#undef GI_S
+#undef GI_STORE_PLANE
+#undef GI_FETCH3
+  uintV inst = GI_SEL((uintV)(GI_INVALID_ID), GI_GATHER(uintV, triangleInstance, tg), surface);
+  if (valid == GI_VW) {
+    vstoreV(inst, 0, outInstance + i);
+  } else {
+    uint tmpI[GI_VW];
+    vstoreV(inst, 0, tmpI);
+    for (int l = 0; l < valid; ++l) outInstance[i + l] = tmpI[l];
+  }
 }
 
 // Reflective shadow map (ALGORITHMS.md §1), one work-item per texel of the light's view:

@@ -1,9 +1,64 @@
 // Direct lighting of the camera G-buffer (ALGORITHMS.md §0): every punctual light (directional,
 // point, spot, and the spot stand-ins of emissive surfaces) through Lambert + GGX, with 3×3 PCF
 // shadow maps, plus the surface's own emission. Output: linear radiance towards the camera.
+//
+// One work-item shades GI_VW adjacent pixels of a row (structure of arrays in floatV: 16 lanes on
+// CPU devices, 1 on GPUs; PERFORMANCE_FACTS.md). The formulas are those of common/brdf.h,
+// common/lights.h and common/shadow.h written lane-wise; lights are uniform across lanes.
 #include "common/brdf.h"
 #include "common/lights.h"
 #include "common/shadow.h"
+#include "common/vector_width.h"
+
+// Row 2 (view-space z) and rows 0, 1, 3 of a column-major matrix applied to (p, 1).
+#define GI_MROW(m, r, p) ((m)[r] * (p).x + (m)[4 + r] * (p).y + (m)[8 + r] * (p).z + (m)[12 + r])
+
+// shadow_pcf_view() lane-wise for view `vi` (the same view for every lane).
+inline floatV shadow_pcf_viewV(global const GiView* views, global const uint* offsets, global const float* depths,
+                               int vi, float3V x, float3V ng) {
+  global const GiView* v = &views[vi];
+  floatV xvz = GI_MROW(v->view, 2, x);
+  floatV texel = v->orthographic ? (floatV)(v->texel_world_size) : v->texel_world_size * fmax(-xvz, 0.0f);
+  floatV off = GI_SHADOW_NORMAL_OFFSET * texel;
+  float3V xo = f3v(x.x + ng.x * off, x.y + ng.y * off, x.z + ng.z * off);
+  floatV cx = GI_MROW(v->view_proj, 0, xo), cy = GI_MROW(v->view_proj, 1, xo), cw = GI_MROW(v->view_proj, 3, xo);
+  floatV ndcx = cx / cw, ndcy = cy / cw;
+  floatV depth = -GI_MROW(v->view, 2, xo) - GI_SHADOW_DEPTH_BIAS * texel;
+  float W = (float)v->width, H = (float)v->height;
+  floatV fx = (ndcx * 0.5f + 0.5f) * W;
+  floatV fy = (0.5f - ndcy * 0.5f) * H;
+  intV lit1 = (cw <= 0.0f) | (fx < 0.0f) | (fy < 0.0f) | (fx >= W) | (fy >= H) | isnan(fx) | isnan(fy);
+  intV ix = convert_intV(floor(GI_SEL(fx, (floatV)(0.0f), lit1)));
+  intV iy = convert_intV(floor(GI_SEL(fy, (floatV)(0.0f), lit1)));
+  global const float* map = depths + offsets[vi];
+  intV x0 = max(ix - 1, 0), x2 = min(ix + 1, v->width - 1);
+  intV r0 = max(iy - 1, 0) * v->width, r1 = iy * v->width, r2 = min(iy + 1, v->height - 1) * v->width;
+  floatV one = (floatV)(1.0f), zero = (floatV)(0.0f);
+#define GI_TAP(r, c) GI_SEL(zero, one, depth <= GI_GATHER(floatV, map, (r) + (c)))
+  floatV lit = GI_TAP(r0, x0) + GI_TAP(r0, ix) + GI_TAP(r0, x2) + GI_TAP(r1, x0) + GI_TAP(r1, ix) + GI_TAP(r1, x2) +
+               GI_TAP(r2, x0) + GI_TAP(r2, ix) + GI_TAP(r2, x2);
+#undef GI_TAP
+  return GI_SEL(lit * (1.0f / 9.0f), one, lit1);
+}
+
+inline floatV shadow_visibilityV(global const GiLight* l, global const GiView* views, global const uint* offsets,
+                                 global const float* depths, float3V x, float3V ng) {
+  if (l->shadow_map < 0) return (floatV)(1.0f);
+  int vi = l->shadow_map;
+  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
+  if (!cube) return shadow_pcf_viewV(views, offsets, depths, vi, x, ng);
+  // shadow_cube_face() per lane; each face present among the lanes is evaluated once.
+  float3V d = f3v(x.x - l->position[0], x.y - l->position[1], x.z - l->position[2]);
+  floatV ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
+  intV face = GI_SEL(GI_SEL((intV)(5), (intV)(4), d.z > 0.0f), GI_SEL((intV)(3), (intV)(2), d.y > 0.0f), ay >= az);
+  face = GI_SEL(face, GI_SEL((intV)(1), (intV)(0), d.x > 0.0f), (ax >= ay) & (ax >= az));
+  floatV vis = (floatV)(1.0f);
+  for (int f = 0; f < 6; ++f) {
+    intV here = face == f;
+    if (GI_ANY(here)) vis = GI_SEL(vis, shadow_pcf_viewV(views, offsets, depths, vi + f, x, ng), here);
+  }
+  return vis;
+}
 
 kernel void direct_lighting(GiView camera, global const float4* gPosition, global const float4* gGeoNormal,
                             global const float4* gNormal, global const float4* gAlbedo,
@@ -11,37 +66,102 @@ kernel void direct_lighting(GiView camera, global const float4* gPosition, globa
                             global const GiLight* lights, int lightCount, global const GiView* shadowViews,
                             global const uint* shadowOffsets, global const float* shadowDepths,
                             global float4* outRadiance) {
-  int px = get_global_id(0), py = get_global_id(1);
-  if (px >= camera.width || py >= camera.height) return;
-  size_t i = (size_t)py * camera.width + px;
-  float4 pos = gPosition[i];
-  if (pos.w == 0.0f) {
-    outRadiance[i] = (float4)(0.0f);
-    return;
+  int px0 = get_global_id(0) * GI_VW, py = get_global_id(1);
+  if (px0 >= camera.width || py >= camera.height) return;
+  size_t i = (size_t)py * camera.width + px0;
+  int valid = min(GI_VW, camera.width - px0);
+  // Planes in SoA form. A partial group at the right border reads its last pixel repeatedly.
+  float tmp[4 * GI_VW];
+#define GI_LOAD_PLANE(plane, X, Y, Z, W)                                                   \
+  if (valid == GI_VW) {                                                                    \
+    GI_AOS4_LOAD((global const float*)(plane + i), X, Y, Z, W)                             \
+  } else {                                                                                 \
+    for (int l = 0; l < GI_VW; ++l) vstore4(plane[i + min(l, valid - 1)], l, tmp);         \
+    GI_AOS4_LOAD(tmp, X, Y, Z, W)                                                          \
   }
-  float3 x = pos.xyz;
-  float3 ng = gGeoNormal[i].xyz, n = gNormal[i].xyz;
-  float4 alb = gAlbedo[i], spec = gSpecular[i];
-  SurfaceSample s;
-  s.diffuse = alb.xyz;
-  s.metallic = alb.w;
-  s.f0 = spec.xyz;
-  s.roughness = spec.w;
-  float3 wo = camera.orthographic ? -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz)
-                                  : normalize(vload3(0, camera.eye) - x);
-  float3 radiance = gEmission[i].xyz;
+  floatV pw, unused;
+  float3V x, ng, n, alb, spec, em;
+  floatV metallic, roughness;
+  GI_LOAD_PLANE(gPosition, x.x, x.y, x.z, pw)
+  GI_LOAD_PLANE(gGeoNormal, ng.x, ng.y, ng.z, unused)
+  GI_LOAD_PLANE(gNormal, n.x, n.y, n.z, unused)
+  GI_LOAD_PLANE(gAlbedo, alb.x, alb.y, alb.z, metallic)
+  GI_LOAD_PLANE(gSpecular, spec.x, spec.y, spec.z, roughness)
+  GI_LOAD_PLANE(gEmission, em.x, em.y, em.z, unused)
+#undef GI_LOAD_PLANE
+  intV surface = pw != 0.0f;
+  float3V wo;
+  if (camera.orthographic) {
+    float3 w = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
+    wo = f3v((floatV)(w.x), (floatV)(w.y), (floatV)(w.z));
+  } else {
+    wo = f3v(camera.eye[0] - x.x, camera.eye[1] - x.y, camera.eye[2] - x.z);
+    floatV inv = rsqrt(dotV(wo, wo));
+    wo = f3v(wo.x * inv, wo.y * inv, wo.z * inv);
+  }
+  floatV nv = dotV(n, wo);
+  floatV a = fmax(roughness * roughness, GI_MIN_GGX_ALPHA);
+  floatV a2 = a * a;
+  float3V L = em;
   for (int li = 0; li < lightCount; ++li) {
     global const GiLight* l = &lights[li];
-    float3 wi;
-    float dist;
-    float3 E = light_incident(l, x, &wi, &dist);
-    float cosTheta = dot(n, wi);
-    if (cosTheta <= 0.0f || dot(ng, wi) <= 0.0f) continue;
-    if (E.x + E.y + E.z <= 0.0f) continue;
-    float visibility = shadow_visibility(l, shadowViews, shadowOffsets, shadowDepths, x, ng);
-    radiance += brdf_eval(s, n, wo, wi) * E * (cosTheta * visibility);
+    float3V wi, E;
+    if (l->type == GI_LIGHT_DIRECTIONAL) {
+      wi = f3v((floatV)(-l->direction[0]), (floatV)(-l->direction[1]), (floatV)(-l->direction[2]));
+      E = f3v((floatV)(l->intensity[0]), (floatV)(l->intensity[1]), (floatV)(l->intensity[2]));
+    } else {  // light_incident() and light_intensity_towards()
+      float3V d = f3v(l->position[0] - x.x, l->position[1] - x.y, l->position[2] - x.z);
+      floatV d2 = fmax(dotV(d, d), 1e-12f);
+      floatV inv = rsqrt(d2);
+      wi = f3v(d.x * inv, d.y * inv, d.z * inv);
+      floatV s = (floatV)(1.0f);
+      if (l->type == GI_LIGHT_SPOT) {
+        floatV c = -(wi.x * l->direction[0] + wi.y * l->direction[1] + wi.z * l->direction[2]);
+        if (l->falloff == GI_SPOT_FALLOFF_COSINE) {
+          s = fmax(c, 0.0f);
+        } else {
+          float scale = 1.0f / fmax(1e-3f, l->cos_inner - l->cos_outer);
+          floatV t = clamp((c - l->cos_outer) * scale, 0.0f, 1.0f);
+          s = t * t;
+        }
+      }
+      E = f3v(l->intensity[0] * s / d2, l->intensity[1] * s / d2, l->intensity[2] * s / d2);
+    }
+    floatV cosTheta = dotV(n, wi);
+    intV lit = surface & (cosTheta > 0.0f) & (dotV(ng, wi) > 0.0f) & (E.x + E.y + E.z > 0.0f);
+    if (!GI_ANY(lit)) continue;
+    floatV visibility = shadow_visibilityV(l, shadowViews, shadowOffsets, shadowDepths, x, ng);
+    // brdf_eval(): Lambert + GGX (ggx_D, smith_visibility, fresnel_schlick).
+    float3V h = f3v(wo.x + wi.x, wo.y + wi.y, wo.z + wi.z);
+    floatV hinv = rsqrt(dotV(h, h));
+    h = f3v(h.x * hinv, h.y * hinv, h.z * hinv);
+    floatV nh = fmax(dotV(n, h), 0.0f);
+    floatV dd = nh * nh * (a2 - 1.0f) + 1.0f;
+    floatV D = a2 / (GI_PI * dd * dd);
+    floatV nl = cosTheta;
+    floatV gv = nl * sqrt(nv * nv * (1.0f - a2) + a2);
+    floatV gl = nv * sqrt(nl * nl * (1.0f - a2) + a2);
+    floatV V = 0.5f / fmax(gv + gl, 1e-12f);
+    floatV m = clamp(1.0f - dotV(wi, h), 0.0f, 1.0f);
+    floatV m2 = m * m, m5 = m2 * m2 * m;
+    floatV DV = GI_SEL((floatV)(0.0f), D * V, nv > 0.0f);
+    floatV k = cosTheta * visibility;
+    floatV fr = (alb.x * GI_INV_PI + DV * (spec.x + (1.0f - spec.x) * m5)) * E.x * k;
+    floatV fg = (alb.y * GI_INV_PI + DV * (spec.y + (1.0f - spec.y) * m5)) * E.y * k;
+    floatV fb = (alb.z * GI_INV_PI + DV * (spec.z + (1.0f - spec.z) * m5)) * E.z * k;
+    L.x += GI_SEL((floatV)(0.0f), fr, lit);
+    L.y += GI_SEL((floatV)(0.0f), fg, lit);
+    L.z += GI_SEL((floatV)(0.0f), fb, lit);
   }
-  outRadiance[i] = (float4)(radiance, 1.0f);
+  floatV zero = (floatV)(0.0f);
+  floatV rx = GI_SEL(zero, L.x, surface), ry = GI_SEL(zero, L.y, surface), rz = GI_SEL(zero, L.z, surface);
+  floatV rw = GI_SEL(zero, (floatV)(1.0f), surface);
+  if (valid == GI_VW) {
+    GI_AOS4_STORE((global float*)(outRadiance + i), rx, ry, rz, rw)
+  } else {
+    GI_AOS4_STORE(tmp, rx, ry, rz, rw)
+    for (int l = 0; l < valid; ++l) outRadiance[i + l] = vload4(l, tmp);
+  }
 }
 
 // Final radiance = direct + indirect (the technique's output), both linear.

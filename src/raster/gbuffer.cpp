@@ -66,7 +66,11 @@ void RasterPasses::renderGBuffer(const DeviceScene& scene, const GiView& camera,
   gbufferResolve_.args(camera, out.visibility.triangle, scene.positions, scene.normals, scene.tangents, scene.uvs,
                        scene.triangles, scene.triangleInstance, scene.materials, scene.textures, scene.texels,
                        out.position, out.geoNormal, out.normal, out.albedo, out.specular, out.emission, out.instance);
-  ctx_.launch(gbufferResolve_, cl::NDRange::d2(camera.width, camera.height, 16, 16), "gbuffer: resolve");
+  // One work-item per GI_VW pixels of a row (16 on CPU devices, 1 on GPUs).
+  const int vw = ctx_.vectorWidth();
+  const size_t lx = vw == 1 ? 16 : 1, ly = vw == 1 ? 16 : 8;
+  ctx_.launch(gbufferResolve_, cl::NDRange::d2((camera.width + vw - 1) / vw, camera.height, lx, ly),
+              "gbuffer: resolve");
 }
 
 void RasterPasses::planShadowMaps(std::vector<GiLight>& lights, const Bounds& bounds, const ShadowSettings& settings,

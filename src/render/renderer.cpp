@@ -89,7 +89,11 @@ PassTimes Renderer::renderFrame() {
   directKernel_.args(cameraView_, gbuffer_.position, gbuffer_.geoNormal, gbuffer_.normal, gbuffer_.albedo,
                      gbuffer_.specular, gbuffer_.emission, deviceScene_->lights, int(scene_.lights.size()),
                      shadowMaps_.viewTable, shadowMaps_.offsetTable, shadowMaps_.depths, direct_);
-  ctx_.launch(directKernel_, cl::NDRange::d2(width_, height_, 16, 16), "direct lighting");
+  // One work-item per GI_VW pixels of a row (16 on CPU devices, 1 on GPUs).
+  const int vw = ctx_.vectorWidth(), groupsX = (width_ + vw - 1) / vw;
+  const size_t lx = vw == 1 ? 16 : 1, ly = vw == 1 ? 16 : 8;
+  ctx_.launch(directKernel_, cl::NDRange::d2(cl::roundUp(groupsX, lx), cl::roundUp(height_, ly), lx, ly),
+              "direct lighting");
 
   if (technique_) {
     technique_->render(FrameResources{ctx_, scene_, *deviceScene_, gbuffer_, shadowMaps_, rsms_, params_}, indirect_);
