@@ -205,7 +205,9 @@ kernel void pt_render(GI_BVH_ARGS,
           }
         }
       }
-      // (At j == kMax the path still continues: the emission found at vertex j + 1 has order j.)
+      // At j == kMax the path continues only for the emission found at vertex j + 1 (order j):
+      // without emissive triangles that ray cannot add anything.
+      if (j >= kMax && emitCount == 0) break;
       // BSDF sampling for the next direction.
       float3 u3 = (float3)(pt_rand(&rng), pt_rand(&rng), pt_rand(&rng));
       float3 wi;
