@@ -13,6 +13,9 @@ ParamSet declareAllParams() {
   p.addInt("shadow.resolution", 2048, 64, 8192, "shadow map size (texels per side) for directional and spot lights");
   p.addInt("shadow.cube_resolution", 1024, 32, 4096, "shadow cube-face size for point lights and wide spot lights");
   p.addInt("rsm.resolution", 512, 16, 4096, "reflective shadow map size (texels per side)");
+  p.addInt("shadow.static", 0, 0, 1,
+           "1: render shadow maps on the first frame only and reuse them (lights and geometry are static); "
+           "0: every frame");
   for (const TechniqueInfo& t : techniqueRegistry())
     if (t.declareParams) t.declareParams(p);
   return p;
@@ -60,6 +63,7 @@ Renderer::Renderer(cl::Context& ctx, const Scene& scene, const RenderSettings& s
   shadow.resolution = params_.getInt("shadow.resolution");
   shadow.cubeResolution = params_.getInt("shadow.cube_resolution");
   raster_->planShadowMaps(scene_.lights, scene_.bounds, shadow, shadowMaps_);
+  staticShadows_ = params_.getInt("shadow.static") != 0;
   deviceScene_ = std::make_unique<DeviceScene>(ctx_, scene_);
 
   lightingProgram_ = ctx_.buildProgram("kernels/render/direct_lighting.cl");
@@ -81,7 +85,11 @@ Renderer::Renderer(cl::Context& ctx, const Scene& scene, const RenderSettings& s
 Renderer::~Renderer() = default;
 
 PassTimes Renderer::renderFrame() {
-  raster_->renderShadowMaps(*deviceScene_, shadowMaps_);
+  // Nothing in a scene moves yet, so with shadow.static the maps of the first frame stay valid.
+  if (!staticShadows_ || !shadowsRendered_) {
+    raster_->renderShadowMaps(*deviceScene_, shadowMaps_);
+    shadowsRendered_ = true;
+  }
   raster_->renderGBuffer(*deviceScene_, cameraView_, gbuffer_);
   for (size_t l = 0; l < rsms_.size(); ++l)
     raster_->renderRsm(*deviceScene_, scene_, int(l), params_.getInt("rsm.resolution"), rsms_[l]);

@@ -76,6 +76,8 @@ private:
   cl::Kernel directKernel_, composeKernel_;
   cl::Buffer direct_, indirect_, final_;
   bool wantRsm_ = false;
+  bool staticShadows_ = false;  // shadow.static: render the shadow maps once, reuse them
+  bool shadowsRendered_ = false;
 };
 
 // Picks a camera by name or index ("" = default); throws gi::Error listing the cameras.
