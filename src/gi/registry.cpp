@@ -1,10 +1,15 @@
 // The list of GI techniques. Add one line per technique.
 #include "gi/technique.h"
+#include "gi/vpl/techniques.h"
+#include "gi/rsm/rsm_technique.h"
 
 namespace gi {
 
 const std::vector<TechniqueInfo>& techniqueRegistry() {
   static const std::vector<TechniqueInfo> registry = {
+      vplTechniqueInfo(),
+      igiTechniqueInfo(),
+      rsmTechniqueInfo(),
   };
   return registry;
 }

@@ -1,0 +1,172 @@
+#include "gi/vpl/vpl_lights.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gi {
+
+namespace {
+constexpr float kInvPi = 0.31830988618379067154f;
+
+float luminanceOf(glm::vec3 c) { return c.x * 0.2126f + c.y * 0.7152f + c.z * 0.0722f; }
+
+float radicalInverse(uint32_t i, uint32_t base) {
+  float inv = 1.0f / float(base), f = inv, r = 0.0f;
+  while (i > 0) {
+    r += float(i % base) * f;
+    i /= base;
+    f *= inv;
+  }
+  return r;
+}
+
+int cdfSearch(const float* cdf, int n, float t) {
+  int lo = 0, hi = n - 1;
+  while (lo < hi) {
+    int mid = (lo + hi) >> 1;
+    if (cdf[mid] > t) hi = mid;
+    else lo = mid + 1;
+  }
+  return lo;
+}
+}  // namespace
+
+VplGenerator::VplGenerator(cl::Context& ctx, std::string label) : ctx_(ctx), label_(std::move(label)) {
+  program_ = ctx_.buildProgram("kernels/gi/vpl/vpl_generate.cl");
+  rowCdf_ = program_.kernel("vpl_row_cdf");
+  marginal_ = program_.kernel("vpl_marginal_cdf");
+  sample_ = program_.kernel("vpl_sample");
+}
+
+void VplGenerator::generate(const std::vector<ReflectiveShadowMap>& rsms, int perLight, float dminOverride,
+                            VplSet& out) {
+  if (perLight < 1 || perLight > 4096) throw Error("VPL count " + std::to_string(perLight) + " outside 1..4096");
+  int total = perLight * int(rsms.size());
+  if (!out.vpls || out.count != total) {
+    out.vpls = cl::Buffer(ctx_, size_t(std::max(total, 1)) * 3 * 16, CL_MEM_READ_WRITE, "VPLs");
+    if (total == 0) ctx_.fill(out.vpls, 0.0f);
+  }
+  out.count = total;
+  out.perLight = perLight;
+  for (size_t l = 0; l < rsms.size(); ++l) {
+    const ReflectiveShadowMap& r = rsms[l];
+    int res = r.view.width;
+    if (res != cdfRes_) {
+      texelCdf_ = cl::Buffer(ctx_, size_t(res) * res * 4, CL_MEM_READ_WRITE, "VPL texel CDF");
+      rowSum_ = cl::Buffer(ctx_, size_t(res) * 4, CL_MEM_READ_WRITE, "VPL row sums");
+      rowCdfBuf_ = cl::Buffer(ctx_, size_t(res) * 4, CL_MEM_READ_WRITE, "VPL row CDF");
+      cdfRes_ = res;
+    }
+    rowCdf_.args(r.flux, res, texelCdf_, rowSum_);
+    ctx_.launch(rowCdf_, cl::NDRange::d1(cl::roundUp(res, 16), 16), label_ + ": cdf");
+    marginal_.args(rowSum_, res, rowCdfBuf_);
+    ctx_.launch(marginal_, cl::NDRange::d1(1, 1), label_ + ": cdf");
+    sample_.args(r.view, r.position, r.normal, r.flux, res, texelCdf_, rowCdfBuf_, perLight, dminOverride,
+                 int(l) * perLight, out.vpls);
+    ctx_.launch(sample_, cl::NDRange::d1(cl::roundUp(perLight, 64), 64), label_ + ": sample");
+  }
+}
+
+std::vector<HostVpl> hostGenerateVpls(const GiView& view, const std::vector<glm::vec4>& position,
+                                      const std::vector<glm::vec4>& normal, const std::vector<glm::vec4>& flux,
+                                      int res, int count, float dminOverride) {
+  std::vector<float> texelCdf(size_t(res) * res), rowCdf(res);
+  float run = 0.0f;
+  for (int y = 0; y < res; ++y) {
+    float s = 0.0f;
+    for (int x = 0; x < res; ++x) {
+      s += std::max(luminanceOf(glm::vec3(flux[size_t(y) * res + x])), 0.0f);
+      texelCdf[size_t(y) * res + x] = s;
+    }
+    run += s;
+    rowCdf[y] = run;
+  }
+  std::vector<HostVpl> out(count);
+  float total = rowCdf[res - 1];
+  if (!(total > 0.0f)) return out;
+  glm::vec3 axis = -glm::vec3(view.view[2], view.view[6], view.view[10]);
+  glm::vec3 eye(view.eye[0], view.eye[1], view.eye[2]);
+  for (int k = 0; k < count; ++k) {
+    float u1 = radicalInverse(uint32_t(k) + 1, 2), u2 = radicalInverse(uint32_t(k) + 1, 3);
+    int y = cdfSearch(rowCdf.data(), res, u2 * total);
+    const float* tc = texelCdf.data() + size_t(y) * res;
+    int x = cdfSearch(tc, res, u1 * tc[res - 1]);
+    size_t t = size_t(y) * res + x;
+    glm::vec3 phi(flux[t]);
+    float lum = std::max(luminanceOf(phi), 0.0f);
+    HostVpl& v = out[k];
+    v.position = glm::vec3(position[t]);
+    v.normal = glm::vec3(normal[t]);
+    v.flux = lum > 0.0f ? phi * (total / (float(count) * lum)) : glm::vec3(0.0f);
+    float footprint = view.texel_world_size;
+    if (!view.orthographic) footprint *= std::abs(glm::dot(v.position - eye, axis));
+    float dmin = dminOverride > 0.0f ? dminOverride : 0.5f * footprint;
+    v.dmin2 = dmin * dmin;
+  }
+  return out;
+}
+
+glm::vec3 hostIrradiance(const std::vector<HostVpl>& vpls, glm::vec3 x, glm::vec3 n, int first, int step) {
+  glm::vec3 e(0.0f);
+  for (size_t k = size_t(first); k < vpls.size(); k += size_t(step)) {
+    const HostVpl& p = vpls[k];
+    glm::vec3 v = p.position - x;
+    float d2 = glm::dot(v, v);
+    float cp = -glm::dot(p.normal, v), cr = glm::dot(n, v);
+    float g = std::max(cp, 0.0f) * std::max(cr, 0.0f) / (std::max(d2, 1e-20f) * std::max(d2, p.dmin2));
+    e += p.flux * g;
+  }
+  return e * (float(step) * kInvPi);
+}
+
+InterleavedGather::InterleavedGather(cl::Context& ctx, std::string prefix) : ctx_(ctx), prefix_(std::move(prefix)) {
+  program_ = ctx_.buildProgram("kernels/gi/vpl/vpl_gather.cl");
+  deinterleave_ = program_.kernel("gi_deinterleave");
+  gather_ = program_.kernel("vpl_gather");
+  reRadiance_ = program_.kernel("gi_reinterleave_radiance");
+  reIrradiance_ = program_.kernel("gi_reinterleave_irradiance");
+}
+
+void InterleavedGather::resize(int width, int height, int n, int m) {
+  if (n < 1 || n > 8 || m < 1 || m > 8) throw Error("interleave pattern " + std::to_string(n) + "x" + std::to_string(m) + " outside 1x1..8x8");
+  if (width == width_ && height == height_ && n == n_ && m == m_ && planes_) return;
+  width_ = width;
+  height_ = height;
+  n_ = n;
+  m_ = m;
+  subW_ = (width + n - 1) / n;
+  subH_ = (height + m - 1) / m;
+  stride_ = int(cl::roundUp(size_t(subW_) * subH_, size_t(ctx_.vectorWidth())));
+  planes_ = cl::Buffer(ctx_, slots() * 6 * 4, CL_MEM_READ_WRITE, prefix_ + " G-buffer sub-images");
+  irradiance_ = cl::Buffer(ctx_, slots() * 3 * 4, CL_MEM_READ_WRITE, prefix_ + " sub-image irradiance");
+  ctx_.fill(planes_, 0.0f);  // slots without a pixel keep a zero normal: E = 0 there
+  ctx_.fill(irradiance_, 0.0f);
+}
+
+void InterleavedGather::deinterleave(const GBuffer& g) {
+  deinterleave_.args(width_, height_, n_, m_, subW_, stride_, g.position, g.normal, planes_);
+  ctx_.launch(deinterleave_, cl::NDRange::d2(cl::roundUp(width_, 16), cl::roundUp(height_, 16), 16, 16),
+              prefix_ + ": de-interleave");
+}
+
+void InterleavedGather::shade(const VplSet& v) {
+  int sets = n_ * m_;
+  gather_.args(planes_, sets, stride_, v.vpls, v.count, irradiance_);
+  size_t items = slots() / size_t(ctx_.vectorWidth());
+  size_t local = ctx_.vectorWidth() > 1 ? 4 : 64;
+  ctx_.launch(gather_, cl::NDRange::d1(cl::roundUp(items, local), local), prefix_ + ": shade");
+}
+
+void InterleavedGather::reinterleaveRadiance(const GBuffer& g, cl::Buffer& out) {
+  reRadiance_.args(width_, height_, n_, m_, subW_, stride_, irradiance_, g.albedo, out);
+  ctx_.launch(reRadiance_, cl::NDRange::d2(cl::roundUp(width_, 16), cl::roundUp(height_, 16), 16, 16),
+              prefix_ + ": re-interleave");
+}
+
+void InterleavedGather::reinterleaveIrradiance(cl::Buffer& out) {
+  reIrradiance_.args(width_, height_, n_, m_, subW_, stride_, irradiance_, out);
+  ctx_.launch(reIrradiance_, cl::NDRange::d2(cl::roundUp(width_, 16), cl::roundUp(height_, 16), 16, 16),
+              prefix_ + ": re-interleave");
+}
+
+}  // namespace gi

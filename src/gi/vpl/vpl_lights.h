@@ -1,0 +1,90 @@
+// Virtual point lights from reflective shadow maps (ALGORITHMS.md §2, §2.2;
+// kernels/gi/vpl/vpl_generate.cl) and the interleaved all-pairs gather shared by the `vpl` and
+// `igi` techniques (§2.3; kernels/gi/vpl/vpl_gather.cl).
+#pragma once
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cl/runtime.h"
+#include "raster/gbuffer.h"
+
+namespace gi {
+
+// VPLs of all lights, `perLight` consecutive ones per light, float4 ×3 each:
+// (position, d_min²), (normal, 0), (flux Φ_p in W, 0).
+struct VplSet {
+  cl::Buffer vpls;
+  int count = 0;     // all lights
+  int perLight = 0;
+};
+
+// Flux-importance sampling of each light's RSM with the Halton (2, 3) sequence; CDFs built on the
+// device every frame, nothing read back. Deterministic for a fixed light and scene.
+class VplGenerator {
+public:
+  explicit VplGenerator(cl::Context& ctx, std::string label = "vpl");
+  // perLight in 1..4096; dminOverride > 0 replaces the default 0.5 × RSM texel footprint.
+  void generate(const std::vector<ReflectiveShadowMap>& rsms, int perLight, float dminOverride, VplSet& out);
+
+private:
+  cl::Context& ctx_;
+  std::string label_;
+  cl::Program program_;
+  cl::Kernel rowCdf_, marginal_, sample_;
+  cl::Buffer texelCdf_, rowSum_, rowCdfBuf_;
+  int cdfRes_ = 0;
+};
+
+// Host mirror of the generation (same formulas and summation order), for tests and the bench.
+struct HostVpl {
+  glm::vec3 position{0};
+  float dmin2 = 0;
+  glm::vec3 normal{0};
+  glm::vec3 flux{0};
+};
+std::vector<HostVpl> hostGenerateVpls(const GiView& rsmView, const std::vector<glm::vec4>& position,
+                                      const std::vector<glm::vec4>& normal, const std::vector<glm::vec4>& flux,
+                                      int res, int count, float dminOverride);
+// Host mirror of E_p summed over VPLs k = first, first + step, … (ALGORITHMS.md §2), W/m².
+glm::vec3 hostIrradiance(const std::vector<HostVpl>& vpls, glm::vec3 x, glm::vec3 n, int first = 0, int step = 1);
+
+// The interleaved gather: de-interleave the G-buffer into n·m sub-images (SoA planes), shade
+// each with VPL set c (VPL k -> set k mod n·m, weights × n·m), re-interleave. n = m = 1 is the
+// plain all-pairs gather.
+class InterleavedGather {
+public:
+  // `prefix` names the launches: "<prefix>: de-interleave", "<prefix>: shade", "<prefix>: re-interleave".
+  InterleavedGather(cl::Context& ctx, std::string prefix);
+  void resize(int width, int height, int n, int m);
+  void deinterleave(const GBuffer& g);
+  void shade(const VplSet& vpls);
+  void reinterleaveRadiance(const GBuffer& g, cl::Buffer& out);  // L = ρ/π · E
+  void reinterleaveIrradiance(cl::Buffer& out);                    // E, float4 per pixel
+
+  int n() const { return n_; }
+  int m() const { return m_; }
+  int subWidth() const { return subW_; }
+  int subHeight() const { return subH_; }
+  int stride() const { return stride_; }  // slots per sub-image (multiple of GI_VW)
+  size_t slots() const { return size_t(n_) * m_ * stride_; }
+  const cl::Buffer& planes() const { return planes_; }          // 6 planes: x, y, z, nx, ny, nz
+  const cl::Buffer& irradiance() const { return irradiance_; }  // 3 planes: E r, g, b
+
+private:
+  cl::Context& ctx_;
+  std::string prefix_;
+  cl::Program program_;
+  cl::Kernel deinterleave_, gather_, reRadiance_, reIrradiance_;
+  cl::Buffer planes_, irradiance_;
+  int width_ = 0, height_ = 0, n_ = 0, m_ = 0, subW_ = 0, subH_ = 0, stride_ = 0;
+};
+
+// Host mirror of the packed index (tests).
+inline size_t packedIndex(int x, int y, int n, int m, int subWidth, int stride) {
+  int c = (x % n) + n * (y % m);
+  return size_t(c) * stride + size_t(y / m) * subWidth + size_t(x / n);
+}
+
+}  // namespace gi

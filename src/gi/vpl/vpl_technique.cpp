@@ -1,0 +1,104 @@
+// `vpl`: all-pairs VPL gathering without visibility (docs/techniques/vpl.md).
+// `igi`: the same gather with interleaved sampling + discontinuity filter (docs/techniques/igi.md).
+#include <memory>
+
+#include "gi/filters/discontinuity_filter.h"
+#include "gi/vpl/techniques.h"
+#include "gi/vpl/vpl_lights.h"
+
+namespace gi {
+
+namespace {
+
+class VplTechnique : public Technique {
+public:
+  std::string name() const override { return "vpl"; }
+  bool needsRsm() const override { return true; }
+  void setup(const FrameResources& f) override {
+    generator_ = std::make_unique<VplGenerator>(f.ctx, "vpl");
+    gather_ = std::make_unique<InterleavedGather>(f.ctx, "vpl");
+  }
+  void render(const FrameResources& f, cl::Buffer& indirect) override {
+    generator_->generate(f.rsms, f.params.getInt("vpl.count"), f.params.getFloat("vpl.d_min"), vpls_);
+    gather_->resize(f.gbuffer.width, f.gbuffer.height, 1, 1);
+    gather_->deinterleave(f.gbuffer);
+    gather_->shade(vpls_);
+    gather_->reinterleaveRadiance(f.gbuffer, indirect);
+  }
+
+private:
+  std::unique_ptr<VplGenerator> generator_;
+  std::unique_ptr<InterleavedGather> gather_;
+  VplSet vpls_;
+};
+
+class IgiTechnique : public Technique {
+public:
+  std::string name() const override { return "igi"; }
+  bool needsRsm() const override { return true; }
+  void setup(const FrameResources& f) override {
+    generator_ = std::make_unique<VplGenerator>(f.ctx, "igi: vpl");
+    gather_ = std::make_unique<InterleavedGather>(f.ctx, "igi");
+    filter_ = std::make_unique<DiscontinuityFilter>(f.ctx, "igi: discontinuity filter");
+  }
+  void render(const FrameResources& f, cl::Buffer& indirect) override {
+    const ParamSet& p = f.params;
+    int n = p.getInt("igi.n"), m = p.getInt("igi.m");
+    int fx = p.getInt("igi.filter_x"), fy = p.getInt("igi.filter_y");
+    fx = fx > 0 ? fx : n;
+    fy = fy > 0 ? fy : m;
+    if (fx < n || fy < m)
+      throw Error("igi.filter_x/filter_y (" + std::to_string(fx) + "x" + std::to_string(fy) +
+                  ") must be at least the pattern " + std::to_string(n) + "x" + std::to_string(m));
+    generator_->generate(f.rsms, p.getInt("igi.count"), p.getFloat("igi.d_min"), vpls_);
+    gather_->resize(f.gbuffer.width, f.gbuffer.height, n, m);
+    size_t bytes = size_t(f.gbuffer.width) * f.gbuffer.height * 16;
+    if (!irradiance_ || irradiance_.bytes() != bytes)
+      irradiance_ = cl::Buffer(f.ctx, bytes, CL_MEM_READ_WRITE, "igi irradiance");
+    gather_->deinterleave(f.gbuffer);
+    gather_->shade(vpls_);
+    gather_->reinterleaveIrradiance(irradiance_);
+    GeometryTest t;
+    t.tauZ = p.getFloat("igi.tau_z");
+    t.tauNDegrees = p.getFloat("igi.tau_n");
+    t.sameInstance = p.getBool("igi.same_instance");
+    filter_->run(f.gbuffer, irradiance_, fx, fy, t, indirect);
+  }
+
+private:
+  std::unique_ptr<VplGenerator> generator_;
+  std::unique_ptr<InterleavedGather> gather_;
+  std::unique_ptr<DiscontinuityFilter> filter_;
+  VplSet vpls_;
+  cl::Buffer irradiance_;
+};
+
+}  // namespace
+
+TechniqueInfo vplTechniqueInfo() {
+  return {"vpl", "all-pairs VPL gathering from flux-sampled RSM texels, no visibility (instant radiosity)",
+          [](ParamSet& p) {
+            p.addInt("vpl.count", 256, 1, 4096, "VPLs per light (Halton-stratified, flux-importance-sampled)");
+            p.addFloat("vpl.d_min", 0.0, 0.0, 100.0,
+                       "distance clamp of the 1/d² term in metres; 0 = 0.5 x the RSM texel footprint at each VPL");
+          },
+          [] { return std::make_unique<VplTechnique>(); }};
+}
+
+TechniqueInfo igiTechniqueInfo() {
+  return {"igi", "interleaved VPL gathering (n x m VPL sets on de-interleaved sub-images) + discontinuity filter, no visibility",
+          [](ParamSet& p) {
+            p.addInt("igi.count", 256, 1, 4096, "VPLs per light, split into n*m sets (VPL k -> set k mod n*m)");
+            p.addFloat("igi.d_min", 0.0, 0.0, 100.0, "distance clamp in metres; 0 = 0.5 x RSM texel footprint");
+            p.addInt("igi.n", 4, 1, 8, "interleave pattern width");
+            p.addInt("igi.m", 4, 1, 8, "interleave pattern height");
+            p.addInt("igi.filter_x", 0, 0, 16, "discontinuity filter window width; 0 = n (must be >= n)");
+            p.addInt("igi.filter_y", 0, 0, 16, "discontinuity filter window height; 0 = m (must be >= m)");
+            p.addFloat("igi.tau_z", 0.05, 0.0, 10.0, "filter: relative view-depth tolerance");
+            p.addFloat("igi.tau_n", 25.0, 0.0, 180.0, "filter: geometric-normal tolerance in degrees");
+            p.addBool("igi.same_instance", false, "filter: neighbours must share the instance id");
+          },
+          [] { return std::make_unique<IgiTechnique>(); }};
+}
+
+}  // namespace gi

@@ -1,0 +1,289 @@
+// Instant radiosity kernels against host implementations of the same formulas on tiny inputs
+// (ALGORITHMS.md §2, §2.2, §2.3, §3): VPL generation (flux-importance Halton sampling), the
+// all-pairs gather, interleaving (de-interleave ∘ re-interleave = identity, per-set shading),
+// igi 1×1 == vpl exactly, the discontinuity filter; the one-pixel-per-work-item path (GI_VW = 1).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <tuple>
+
+#include "gi/filters/discontinuity_filter.h"
+#include "gi/vpl/vpl_lights.h"
+#include "render/renderer.h"
+#include "scene/cornell_box.h"
+#include "test_support.h"
+
+using namespace gi;
+
+namespace {
+
+Scene emptyCornellWithSpot() {
+  CornellOptions o;
+  o.withBlocks = false;
+  o.withAreaLight = false;
+  o.spotLight = CornellSpotLight{};
+  o.spotLight->intensity = glm::vec3(1.2f, 1.0f, 0.8f);
+  return makeCornellBox(o);
+}
+
+template <typename T>
+std::vector<T> download(cl::Context& ctx, const cl::Buffer& b) {
+  return ctx.download<T>(b);
+}
+
+std::vector<HostVpl> toHost(const std::vector<glm::vec4>& raw) {
+  std::vector<HostVpl> v(raw.size() / 3);
+  for (size_t k = 0; k < v.size(); ++k) {
+    v[k].position = glm::vec3(raw[3 * k]);
+    v[k].dmin2 = raw[3 * k].w;
+    v[k].normal = glm::vec3(raw[3 * k + 1]);
+    v[k].flux = glm::vec3(raw[3 * k + 2]);
+  }
+  return v;
+}
+
+RenderSettings settings(const std::string& technique, int w, int h, std::vector<std::string> sets) {
+  RenderSettings rs;
+  rs.width = w;
+  rs.height = h;
+  rs.technique = technique;
+  rs.sets = std::move(sets);
+  rs.sets.push_back("rsm.resolution=64");
+  rs.sets.push_back("shadow.resolution=256");
+  rs.sets.push_back("shadow.cube_resolution=128");
+  return rs;
+}
+
+float luminanceOf(glm::vec3 c) { return c.x * 0.2126f + c.y * 0.7152f + c.z * 0.0722f; }
+
+}  // namespace
+
+TEST(VplGeneration, MatchesHostMirrorIsDeterministicAndConservesFlux) {
+  cl::Context& ctx = test::context();
+  Scene s = emptyCornellWithSpot();
+  Renderer r(ctx, s, settings("vpl", 16, 16, {"vpl.count=300"}));
+  r.renderFrame();
+  const ReflectiveShadowMap& rsm = r.rsms().at(0);
+  int res = rsm.view.width;
+  auto pos = download<glm::vec4>(ctx, rsm.position), nrm = download<glm::vec4>(ctx, rsm.normal),
+       flux = download<glm::vec4>(ctx, rsm.flux);
+  VplGenerator gen(ctx);
+  VplSet a, b;
+  for (int count : {1, 7, 300, 4096}) {
+    gen.generate(r.rsms(), count, 0.0f, a);
+    gen.generate(r.rsms(), count, 0.0f, b);
+    ctx.profiler().discard();
+    auto ra = download<glm::vec4>(ctx, a.vpls), rb = download<glm::vec4>(ctx, b.vpls);
+    ASSERT_EQ(ra.size(), size_t(count) * 3);
+    EXPECT_EQ(0, std::memcmp(ra.data(), rb.data(), ra.size() * 16)) << "not deterministic, N=" << count;
+    std::vector<HostVpl> dev = toHost(ra);
+    std::vector<HostVpl> host = hostGenerateVpls(rsm.view, pos, nrm, flux, res, count, 0.0f);
+    int same = 0;
+    double lumSum = 0;
+    for (int k = 0; k < count; ++k) {
+      lumSum += luminanceOf(dev[k].flux);
+      if (glm::length(dev[k].position - host[k].position) > 1e-6f) continue;  // a CDF tie picked a neighbour
+      ++same;
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(dev[k].flux[c], host[k].flux[c], 1e-4f * std::abs(host[k].flux[c]) + 1e-9f);
+      EXPECT_NEAR(dev[k].dmin2, host[k].dmin2, 1e-4f * host[k].dmin2);
+      EXPECT_NEAR(glm::dot(dev[k].normal, host[k].normal), 1.0f, 1e-5f);
+    }
+    EXPECT_GE(same, int(0.99 * count)) << "N=" << count;
+    // Every VPL carries luminance Σlum/N exactly (pdf ∝ luminance): the sum is the RSM's total.
+    double total = 0;
+    for (auto& f : flux) total += std::max(0.0f, luminanceOf(glm::vec3(f)));
+    EXPECT_NEAR(lumSum, total, 1e-4 * total) << "N=" << count;
+  }
+  // d_min override and the default (0.5 × texel footprint, perspective RSM: grows with depth).
+  gen.generate(r.rsms(), 16, 0.01f, a);
+  for (const HostVpl& v : toHost(download<glm::vec4>(ctx, a.vpls))) EXPECT_FLOAT_EQ(v.dmin2, 1e-4f);
+  ctx.profiler().discard();
+}
+
+TEST(VplGather, KernelMatchesHostFormulaOnOddImage) {
+  cl::Context& ctx = test::context();
+  Scene s = emptyCornellWithSpot();
+  const int W = 23, H = 19;  // not multiples of 16: padded slots
+  Renderer r(ctx, s, settings("vpl", W, H, {"vpl.count=64"}));
+  r.renderFrame();
+  Image ind = r.indirectRadiance();
+  VplGenerator gen(ctx);
+  VplSet v;
+  gen.generate(r.rsms(), 64, 0.0f, v);
+  ctx.profiler().discard();
+  std::vector<HostVpl> vpls = toHost(download<glm::vec4>(ctx, v.vpls));
+  auto pos = download<glm::vec4>(ctx, r.gbuffer().position), nrm = download<glm::vec4>(ctx, r.gbuffer().normal),
+       alb = download<glm::vec4>(ctx, r.gbuffer().albedo);
+  int lit = 0;
+  for (int p = 0; p < W * H; ++p) {
+    glm::vec3 e(0.0f);
+    if (pos[p].w > 0) e = hostIrradiance(vpls, glm::vec3(pos[p]), glm::vec3(nrm[p]));
+    glm::vec3 expected = glm::vec3(alb[p]) * e * 0.31830988618379067154f;
+    for (int c = 0; c < 3; ++c)
+      ASSERT_NEAR(ind.pixels[p * 3 + c], expected[c], 1e-4f * expected[c] + 1e-7f) << "pixel " << p << " ch " << c;
+    lit += expected.y > 0;
+  }
+  EXPECT_GT(lit, W * H / 2);
+}
+
+TEST(VplGather, OnePixelPerWorkItemPathGivesTheSameImage) {
+  Scene s = emptyCornellWithSpot();
+  auto renderWith = [&](cl::Context& ctx, const std::string& technique, std::vector<std::string> sets) {
+    Renderer r(ctx, s, settings(technique, 21, 17, std::move(sets)));
+    r.renderFrame();
+    return r.indirectRadiance();
+  };
+  const char* old = std::getenv("GI_VECTOR_WIDTH");
+  std::string saved = old ? old : "";
+  setenv("GI_VECTOR_WIDTH", test::context().vectorWidth() == 1 ? "16" : "1", 1);
+  cl::Context other(cl::selectDevice(std::getenv("GI_DEVICE") ? "" : "cpu"));
+  if (old) setenv("GI_VECTOR_WIDTH", saved.c_str(), 1);
+  else unsetenv("GI_VECTOR_WIDTH");
+  ASSERT_NE(other.vectorWidth(), test::context().vectorWidth());
+  for (auto [tech, sets] : {std::pair<std::string, std::vector<std::string>>{"vpl", {"vpl.count=100"}},
+                            {"igi", {"igi.count=100", "igi.n=3", "igi.m=2"}}}) {
+    Image a = renderWith(test::context(), tech, sets), b = renderWith(other, tech, sets);
+    for (size_t i = 0; i < a.pixels.size(); ++i)
+      ASSERT_NEAR(a.pixels[i], b.pixels[i], 1e-5f * std::abs(a.pixels[i]) + 1e-9f) << tech << " value " << i;
+  }
+}
+
+TEST(Igi, DeinterleaveThenReinterleaveIsIdentityForEveryPattern) {
+  cl::Context& ctx = test::context();
+  InterleavedGather ig(ctx, "test");
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+  for (auto [W, H] : {std::pair{13, 7}, std::pair{37, 29}, std::pair{16, 16}}) {
+    GBuffer g;
+    g.allocate(ctx, W, H);
+    std::vector<glm::vec4> pos(size_t(W) * H), nrm(size_t(W) * H);
+    for (size_t i = 0; i < pos.size(); ++i) {
+      pos[i] = glm::vec4(U(rng), U(rng), U(rng), 1.0f);
+      nrm[i] = glm::vec4(U(rng), U(rng), U(rng), 0.0f);
+    }
+    ctx.write(g.position, pos.data(), pos.size() * 16);
+    ctx.write(g.normal, nrm.data(), nrm.size() * 16);
+    cl::Buffer out(ctx, pos.size() * 16);
+    for (int n = 1; n <= 8; ++n)
+      for (int m = 1; m <= 8; ++m) {
+        ig.resize(W, H, n, m);
+        ig.deinterleave(g);
+        auto planes = download<float>(ctx, ig.planes());
+        size_t L = ig.slots();
+        // The host index formula matches the kernel, and every slot is hit at most once.
+        std::vector<int> hits(L, 0);
+        for (int y = 0; y < H; ++y)
+          for (int x = 0; x < W; ++x) {
+            size_t o = packedIndex(x, y, n, m, ig.subWidth(), ig.stride());
+            ASSERT_LT(o, L);
+            ASSERT_EQ(++hits[o], 1);
+            ASSERT_EQ(planes[o], pos[size_t(y) * W + x].x);
+            ASSERT_EQ(planes[4 * L + o], nrm[size_t(y) * W + x].y);
+          }
+        ctx.copy(ig.planes(), ig.irradiance(), 3 * L * 4);  // x, y, z planes as "irradiance"
+        ig.reinterleaveIrradiance(out);
+        auto back = download<glm::vec4>(ctx, out);
+        for (size_t i = 0; i < pos.size(); ++i)
+          ASSERT_EQ(glm::vec3(back[i]), glm::vec3(pos[i])) << n << "x" << m << " " << W << "x" << H << " pixel " << i;
+      }
+    ctx.profiler().discard();
+  }
+}
+
+TEST(Igi, EachSubImageIsShadedWithItsOwnVplSet) {
+  cl::Context& ctx = test::context();
+  Scene s = emptyCornellWithSpot();
+  const int W = 19, H = 14, n = 3, m = 2, N = 50;  // N not a multiple of n·m
+  Renderer r(ctx, s, settings("igi", W, H, {"igi.count=50", "igi.n=3", "igi.m=2"}));
+  r.renderFrame();
+  VplGenerator gen(ctx);
+  VplSet v;
+  gen.generate(r.rsms(), N, 0.0f, v);
+  InterleavedGather ig(ctx, "test");
+  ig.resize(W, H, n, m);
+  ig.deinterleave(r.gbuffer());
+  ig.shade(v);
+  cl::Buffer e(ctx, size_t(W) * H * 16);
+  ig.reinterleaveIrradiance(e);
+  auto E = download<glm::vec4>(ctx, e);
+  ctx.profiler().discard();
+  std::vector<HostVpl> vpls = toHost(download<glm::vec4>(ctx, v.vpls));
+  auto pos = download<glm::vec4>(ctx, r.gbuffer().position), nrm = download<glm::vec4>(ctx, r.gbuffer().normal);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      size_t p = size_t(y) * W + x;
+      int c = x % n + n * (y % m);
+      glm::vec3 expected = pos[p].w > 0 ? hostIrradiance(vpls, glm::vec3(pos[p]), glm::vec3(nrm[p]), c, n * m) : glm::vec3(0);
+      for (int ch = 0; ch < 3; ++ch)
+        ASSERT_NEAR(E[p][ch], expected[ch], 1e-4f * expected[ch] + 1e-7f) << "pixel " << x << "," << y;
+    }
+}
+
+TEST(Igi, OneByOnePatternEqualsVplExactly) {
+  Scene s = emptyCornellWithSpot();
+  auto run = [&](const std::string& tech, std::vector<std::string> sets) {
+    Renderer r(test::context(), s, settings(tech, 29, 22, std::move(sets)));
+    r.renderFrame();
+    return r.indirectRadiance();
+  };
+  Image a = run("vpl", {"vpl.count=77"});
+  Image b = run("igi", {"igi.count=77", "igi.n=1", "igi.m=1"});
+  ASSERT_EQ(a.pixels.size(), b.pixels.size());
+  EXPECT_EQ(0, std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)));
+}
+
+TEST(Igi, DiscontinuityFilterMatchesHost) {
+  cl::Context& ctx = test::context();
+  CornellOptions o;  // with blocks: depth and normal discontinuities
+  o.withAreaLight = false;
+  o.spotLight = CornellSpotLight{};
+  Scene s = makeCornellBox(o);
+  const int W = 37, H = 31;
+  Renderer r(ctx, s, settings("vpl", W, H, {"vpl.count=4"}));
+  r.renderFrame();
+  const GBuffer& g = r.gbuffer();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  std::vector<glm::vec4> E(size_t(W) * H);
+  for (auto& e : E) e = glm::vec4(U(rng), U(rng), U(rng), 0.0f);
+  cl::Buffer eb = ctx.upload(E, "E"), out(ctx, E.size() * 16);
+  auto depth = download<float>(ctx, g.visibility.depth);
+  auto gn = download<glm::vec4>(ctx, g.geoNormal), alb = download<glm::vec4>(ctx, g.albedo);
+  auto inst = download<uint32_t>(ctx, g.instance);
+  DiscontinuityFilter filter(ctx, "test filter");
+  for (auto [fx, fy, same] : {std::tuple{4, 4, false}, std::tuple{3, 5, true}, std::tuple{8, 2, false}}) {
+    GeometryTest t;
+    t.sameInstance = same;
+    filter.run(g, eb, fx, fy, t, out);
+    auto L = download<glm::vec4>(ctx, out);
+    float cosN = std::cos(t.tauNDegrees * 3.14159265f / 180.0f);
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        size_t p = size_t(y) * W + x;
+        glm::vec3 expected(0.0f);
+        if (inst[p] != GI_INVALID_ID) {
+          glm::vec3 sum(0.0f);
+          float w = 0;
+          for (int dy = -(fy / 2); dy < fy - fy / 2; ++dy)
+            for (int dx = -(fx / 2); dx < fx - fx / 2; ++dx) {
+              int qx = x + dx, qy = y + dy;
+              if (qx < 0 || qy < 0 || qx >= W || qy >= H) continue;
+              size_t q = size_t(qy) * W + qx;
+              if (inst[q] == GI_INVALID_ID || std::abs(depth[q] - depth[p]) > t.tauZ * depth[p] ||
+                  glm::dot(glm::vec3(gn[q]), glm::vec3(gn[p])) < cosN || (same && inst[q] != inst[p]))
+                continue;
+              sum += glm::vec3(E[q]);
+              w += 1;
+            }
+          glm::vec3 e = w > 0 ? sum / w : glm::vec3(E[p]);
+          expected = glm::vec3(alb[p]) * e * 0.31830988618379067154f;
+        }
+        for (int c = 0; c < 3; ++c)
+          ASSERT_NEAR(L[p][c], expected[c], 1e-5f) << fx << "x" << fy << " pixel " << x << "," << y;
+      }
+  }
+  ctx.profiler().discard();
+}
