@@ -132,48 +132,23 @@ inline float4V sample_textureV(global const GiTexture* table, global const uchar
   return r;
 }
 
-// Camera G-buffer, GI_VW pixels of a row per work-item. Planes (structure of arrays, see
-// src/raster/gbuffer.h): position (w = 1 surface, 0 background), geometric and shading normals,
-// diffuse albedo with metallic in w, specular F0 with roughness in w, emission, instance id.
-kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global const float4* positions,
-                            global const float4* normals, global const float4* tangents, global const float2* uvs,
-                            global const uint4* triangles, global const uint* triangleInstance,
-                            global const GiMaterial* materials, global const GiTexture* textures,
-                            global const uchar4* texels, global float4* outPosition, global float4* outGeoNormal,
-                            global float4* outNormal, global float4* outAlbedo, global float4* outSpecular,
-                            global float4* outEmission, global uint* outInstance) {
-  int px0 = get_global_id(0) * GI_VW, py = get_global_id(1);
-  if (px0 >= view.width || py >= view.height) return;
-  size_t i = (size_t)py * view.width + px0;
-  int valid = min(GI_VW, view.width - px0);
-  uintV t;
-  if (valid == GI_VW) {
-    t = vloadV(0, visTriangle + i);
-  } else {
-    uint tt[GI_VW];
-    for (int l = 0; l < GI_VW; ++l) tt[l] = l < valid ? visTriangle[i + l] : GI_INVALID_ID;
-    t = vloadV(0, tt);
-  }
-  intV surface = t != (uintV)(GI_INVALID_ID);
+typedef struct {
+  float3V position, geoNormal, normal, shading, diffuse, f0, emission;
+  floatV metallic, roughness;
+  uintV triangle;  // t with background lanes replaced by 0
+} SurfaceV;
+
+// resolve_hit() + eval_material() (+ apply_normal_map() when normalMap) for GI_VW pixels of row
+// py starting at px0, lane-wise. Lanes where surface is false are computed on triangle 0 and must
+// be discarded by the caller.
+inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, intV surface, bool normalMap,
+                                 global const float4* positions, global const float4* normals,
+                                 global const float4* tangents, global const float2* uvs,
+                                 global const uint4* triangles, global const GiMaterial* materials,
+                                 global const GiTexture* textures, global const uchar4* texels) {
+  GiView view = *viewp;
   floatV zero = (floatV)(0.0f);
-  float tmp[4 * GI_VW];
-#define GI_STORE_PLANE(plane, X, Y, Z, W)                                       \
-  if (valid == GI_VW) {                                                         \
-    GI_AOS4_STORE((global float*)(plane + i), X, Y, Z, W)                       \
-  } else {                                                                      \
-    GI_AOS4_STORE(tmp, X, Y, Z, W)                                              \
-    for (int l = 0; l < valid; ++l) plane[i + l] = vload4(l, tmp);              \
-  }
-  if (!GI_ANY(surface)) {
-    GI_STORE_PLANE(outPosition, zero, zero, zero, zero)
-    GI_STORE_PLANE(outGeoNormal, zero, zero, zero, zero)
-    GI_STORE_PLANE(outNormal, zero, zero, zero, zero)
-    GI_STORE_PLANE(outAlbedo, zero, zero, zero, zero)
-    GI_STORE_PLANE(outSpecular, zero, zero, zero, zero)
-    GI_STORE_PLANE(outEmission, zero, zero, zero, zero)
-    for (int l = 0; l < valid; ++l) outInstance[i + l] = GI_INVALID_ID;
-    return;
-  }
+  SurfaceV out;
   // Background lanes take triangle 0 for the gathers (their results are discarded).
   uintV tg = GI_SEL((uintV)(0), t, surface);
   global const uint* triU = (global const uint*)triangles;
@@ -302,7 +277,7 @@ kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global 
   // apply_normal_map() per lane.
   float3V shading = nrm;
   float3V t3 = f3v(tng.x, tng.y, tng.z);
-  intV hasNormalMap = (normalTex >= 0) & (dotV(t3, t3) >= 1e-12f) & surface;
+  intV hasNormalMap = (intV)(normalMap ? -1 : 0) & (normalTex >= 0) & (dotV(t3, t3) >= 1e-12f) & surface;
   if (GI_ANY(hasNormalMap)) {
     float3V tt = safe_normalizeV(subV(t3, scaleV(nrm, dotV(nrm, t3))), f3v((floatV)(1.0f), zero, zero));
     float3V bt = scaleV(crossV(nrm, tt), GI_SEL((floatV)(1.0f), (floatV)(-1.0f), tng.w < 0.0f));
@@ -313,6 +288,68 @@ kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global 
     float3V mapped = safe_normalizeV(addV(addV(scaleV(tt, tnx), scaleV(bt, tny)), scaleV(nrm, tnz)), nrm);
     shading = selV(nrm, mapped, hasNormalMap);
   }
+#undef GI_FETCH3
+  out.position = position;
+  out.geoNormal = geoN;
+  out.normal = nrm;
+  out.shading = shading;
+  out.diffuse = diffuse;
+  out.f0 = f0;
+  out.emission = emission;
+  out.metallic = metallic;
+  out.roughness = roughness;
+  out.triangle = tg;
+  return out;
+}
+
+// Camera G-buffer, GI_VW pixels of a row per work-item. Planes (structure of arrays, see
+// src/raster/gbuffer.h): position (w = 1 surface, 0 background), geometric and shading normals,
+// diffuse albedo with metallic in w, specular F0 with roughness in w, emission, instance id.
+kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global const float4* positions,
+                            global const float4* normals, global const float4* tangents, global const float2* uvs,
+                            global const uint4* triangles, global const uint* triangleInstance,
+                            global const GiMaterial* materials, global const GiTexture* textures,
+                            global const uchar4* texels, global float4* outPosition, global float4* outGeoNormal,
+                            global float4* outNormal, global float4* outAlbedo, global float4* outSpecular,
+                            global float4* outEmission, global uint* outInstance) {
+  int px0 = get_global_id(0) * GI_VW, py = get_global_id(1);
+  if (px0 >= view.width || py >= view.height) return;
+  size_t i = (size_t)py * view.width + px0;
+  int valid = min(GI_VW, view.width - px0);
+  uintV t;
+  if (valid == GI_VW) {
+    t = vloadV(0, visTriangle + i);
+  } else {
+    uint tt[GI_VW];
+    for (int l = 0; l < GI_VW; ++l) tt[l] = l < valid ? visTriangle[i + l] : GI_INVALID_ID;
+    t = vloadV(0, tt);
+  }
+  intV surface = t != (uintV)(GI_INVALID_ID);
+  floatV zero = (floatV)(0.0f);
+  float tmp[4 * GI_VW];
+#define GI_STORE_PLANE(plane, X, Y, Z, W)                                       \
+  if (valid == GI_VW) {                                                         \
+    GI_AOS4_STORE((global float*)(plane + i), X, Y, Z, W)                       \
+  } else {                                                                      \
+    GI_AOS4_STORE(tmp, X, Y, Z, W)                                              \
+    for (int l = 0; l < valid; ++l) plane[i + l] = vload4(l, tmp);              \
+  }
+  if (!GI_ANY(surface)) {
+    GI_STORE_PLANE(outPosition, zero, zero, zero, zero)
+    GI_STORE_PLANE(outGeoNormal, zero, zero, zero, zero)
+    GI_STORE_PLANE(outNormal, zero, zero, zero, zero)
+    GI_STORE_PLANE(outAlbedo, zero, zero, zero, zero)
+    GI_STORE_PLANE(outSpecular, zero, zero, zero, zero)
+    GI_STORE_PLANE(outEmission, zero, zero, zero, zero)
+    for (int l = 0; l < valid; ++l) outInstance[i + l] = GI_INVALID_ID;
+    return;
+  }
+  SurfaceV sv = resolve_surfaceV(&view, px0, py, t, surface, true, positions, normals, tangents, uvs, triangles,
+                                 materials, textures, texels);
+  uintV tg = sv.triangle;
+  float3V position = sv.position, geoN = sv.geoNormal, shading = sv.shading, diffuse = sv.diffuse, f0 = sv.f0,
+          emission = sv.emission;
+  floatV metallic = sv.metallic, roughness = sv.roughness;
   floatV one = (floatV)(1.0f);
 #define GI_S(x) GI_SEL(zero, x, surface)
   GI_STORE_PLANE(outPosition, GI_S(position.x), GI_S(position.y), GI_S(position.z), GI_S(one))
@@ -323,7 +360,6 @@ kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global 
   GI_STORE_PLANE(outEmission, GI_S(emission.x), GI_S(emission.y), GI_S(emission.z), zero)
 #undef GI_S
 #undef GI_STORE_PLANE
-#undef GI_FETCH3
   uintV inst = GI_SEL((uintV)(GI_INVALID_ID), GI_GATHER(uintV, triangleInstance, tg), surface);
   if (valid == GI_VW) {
     vstoreV(inst, 0, outInstance + i);
@@ -345,36 +381,72 @@ kernel void rsm_resolve(GiView view, global const GiLight* lights, int lightInde
                         global const float2* uvs, global const uint4* triangles, global const GiMaterial* materials,
                         global const GiTexture* textures, global const uchar4* texels, global float4* outPosition,
                         global float4* outNormal, global float4* outFlux) {
-  int px = get_global_id(0), py = get_global_id(1);
-  if (px >= view.width || py >= view.height) return;
-  size_t i = (size_t)py * view.width + px;
-  uint t = visTriangle[i];
-  if (t == GI_INVALID_ID) {
-    outPosition[i] = (float4)(0.0f);
-    outNormal[i] = (float4)(0.0f);
-    outFlux[i] = (float4)(0.0f);
+  // GI_VW texels of a row per work-item (lane-wise, as gbuffer_resolve).
+  int px0 = get_global_id(0) * GI_VW, py = get_global_id(1);
+  if (px0 >= view.width || py >= view.height) return;
+  size_t i = (size_t)py * view.width + px0;
+  int valid = min(GI_VW, view.width - px0);
+  uintV t;
+  if (valid == GI_VW) {
+    t = vloadV(0, visTriangle + i);
+  } else {
+    uint tt[GI_VW];
+    for (int l = 0; l < GI_VW; ++l) tt[l] = l < valid ? visTriangle[i + l] : GI_INVALID_ID;
+    t = vloadV(0, tt);
+  }
+  intV surface = t != (uintV)(GI_INVALID_ID);
+  floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
+  float tmp[4 * GI_VW];
+#define GI_STORE_PLANE(plane, X, Y, Z, W)                                       \
+  if (valid == GI_VW) {                                                         \
+    GI_AOS4_STORE((global float*)(plane + i), X, Y, Z, W)                       \
+  } else {                                                                      \
+    GI_AOS4_STORE(tmp, X, Y, Z, W)                                              \
+    for (int l = 0; l < valid; ++l) plane[i + l] = vload4(l, tmp);              \
+  }
+  if (!GI_ANY(surface)) {
+    GI_STORE_PLANE(outPosition, zero, zero, zero, zero)
+    GI_STORE_PLANE(outNormal, zero, zero, zero, zero)
+    GI_STORE_PLANE(outFlux, zero, zero, zero, zero)
     return;
   }
-  SurfaceHit h = resolve_hit(&view, px, py, t, positions, normals, tangents, uvs, triangles, materials, textures);
-  SurfaceSample s = eval_material(&materials[h.material], textures, texels, h.uv, h.lod);
+  SurfaceV sv = resolve_surfaceV(&view, px0, py, t, surface, false, positions, normals, tangents, uvs, triangles,
+                                 materials, textures, texels);
   global const GiLight* l = &lights[lightIndex];
-  float3 flux;
+  float3V I = f3v((floatV)(l->intensity[0]), (floatV)(l->intensity[1]), (floatV)(l->intensity[2]));
+  float3V flux;
   if (l->type == GI_LIGHT_DIRECTIONAL) {
-    bool facing = dot(h.geoNormal, -vload3(0, l->direction)) > 0.0f;
+    floatV facing = dotV(sv.geoNormal, f3v((floatV)(-l->direction[0]), (floatV)(-l->direction[1]),
+                                           (floatV)(-l->direction[2])));
     float a = view.texel_world_size * view.texel_world_size;
-    flux = facing ? s.diffuse * vload3(0, l->intensity) * a : (float3)(0.0f);
+    intV f = facing > 0.0f;
+    flux = selV(f3v(zero, zero, zero), scaleV(f3v(sv.diffuse.x * I.x, sv.diffuse.y * I.y, sv.diffuse.z * I.z), a), f);
   } else {
-    float3 toSurface = h.position - vload3(0, l->position);
-    float3 w = normalize(toSurface);
-    // Solid angle of a texel of a perspective view: s²·cos³θ, s the texel size on the image
-    // plane at distance 1 and θ the angle between w and the view axis.
-    float3 axis = -(float3)(view.view[2], view.view[6], view.view[10]);
-    float c = dot(w, axis);
-    float omega = view.texel_world_size * view.texel_world_size * c * c * c;
-    bool facing = dot(h.geoNormal, -w) > 0.0f;
-    flux = facing ? s.diffuse * light_intensity_towards(l, w) * omega : (float3)(0.0f);
+    float3V toSurface = f3v(sv.position.x - l->position[0], sv.position.y - l->position[1], sv.position.z - l->position[2]);
+    float3V w = scaleV(toSurface, rsqrt(dotV(toSurface, toSurface)));
+    // Solid angle of a texel of a perspective view: s²·cos³θ (see the scalar form's comment).
+    float ax = -view.view[2], ay = -view.view[6], az = -view.view[10];
+    floatV c = w.x * ax + w.y * ay + w.z * az;
+    floatV omega = view.texel_world_size * view.texel_world_size * c * c * c;
+    intV f = dotV(sv.geoNormal, negV(w)) > 0.0f;
+    floatV s = (floatV)(1.0f);  // light_intensity_towards()
+    if (l->type == GI_LIGHT_SPOT) {
+      floatV cs = w.x * l->direction[0] + w.y * l->direction[1] + w.z * l->direction[2];
+      if (l->falloff == GI_SPOT_FALLOFF_COSINE) {
+        s = fmax(cs, 0.0f);
+      } else {
+        float scale = 1.0f / fmax(1e-3f, l->cos_inner - l->cos_outer);
+        floatV ta = clamp((cs - l->cos_outer) * scale, 0.0f, 1.0f);
+        s = ta * ta;
+      }
+    }
+    float3V Iw = l->type == GI_LIGHT_SPOT ? scaleV(I, s) : I;
+    flux = selV(f3v(zero, zero, zero), scaleV(f3v(sv.diffuse.x * Iw.x, sv.diffuse.y * Iw.y, sv.diffuse.z * Iw.z), omega), f);
   }
-  outPosition[i] = (float4)(h.position, 1.0f);
-  outNormal[i] = (float4)(h.normal, 0.0f);
-  outFlux[i] = (float4)(flux, 0.0f);
+#define GI_S(x) GI_SEL(zero, x, surface)
+  GI_STORE_PLANE(outPosition, GI_S(sv.position.x), GI_S(sv.position.y), GI_S(sv.position.z), GI_S(one))
+  GI_STORE_PLANE(outNormal, GI_S(sv.normal.x), GI_S(sv.normal.y), GI_S(sv.normal.z), zero)
+  GI_STORE_PLANE(outFlux, GI_S(flux.x), GI_S(flux.y), GI_S(flux.z), zero)
+#undef GI_S
+#undef GI_STORE_PLANE
 }

@@ -118,7 +118,9 @@ void RasterPasses::renderRsm(const DeviceScene& scene, const Scene& host, int li
   rsmResolve_.args(view, scene.lights, light, out.visibility.triangle, scene.positions, scene.normals, scene.tangents,
                    scene.uvs, scene.triangles, scene.materials, scene.textures, scene.texels, out.position, out.normal,
                    out.flux);
-  ctx_.launch(rsmResolve_, cl::NDRange::d2(resolution, resolution, 16, 16), "rsm: resolve");
+  const int vw = ctx_.vectorWidth();
+  const size_t lx = vw == 1 ? 16 : 1, ly = vw == 1 ? 16 : 8;
+  ctx_.launch(rsmResolve_, cl::NDRange::d2((resolution + vw - 1) / vw, resolution, lx, ly), "rsm: resolve");
 }
 
 }  // namespace gi
