@@ -117,6 +117,57 @@ TEST(ReferencePathTracer, PointLitPlaneMatchesInverseSquareLaw) {
     }
 }
 
+// Directional light E along d: L = ρ/π · E · cos θ everywhere on a plane. Spot light with cosine
+// falloff pointing down from height h: I(θ) = I0 cos θ, so L = ρ/π · I0 · h² / d⁴. A light named
+// "emitter:*" is a rasterizer stand-in and must not add anything.
+TEST(ReferencePathTracer, DirectionalAndCosineSpotLightsAndStandInsIgnored) {
+  Scene scene;
+  scene.materials.push_back(test::diffuseMaterial(0.5f, 0.5f, 0.5f));
+  test::addQuad(scene, {-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}, 0);
+  scene.computeBounds();
+  GiLight sun{};
+  sun.type = GI_LIGHT_DIRECTIONAL;
+  sun.direction[0] = 0.6f; sun.direction[1] = -0.8f;
+  for (int c = 0; c < 3; ++c) sun.intensity[c] = 2.0f;
+  sun.shadow_map = -1;
+  GiLight standIn = test::pointLight(glm::vec3(0, 0.5f, 0), 1000.0f);
+  scene.lights = {sun, standIn};
+  scene.lightNames = {"sun", "emitter:fake"};
+  PathTracerOptions o;
+  o.width = o.height = 8;
+  o.mode = ReferenceMode::Direct;
+  o.diffuseOnly = true;
+  Camera cam = lookingDown(2.0f, 0.8f);
+  Image img = render(scene, cam, o, 4);
+  for (size_t i = 0; i < img.pixelCount(); ++i) ASSERT_NEAR(img.pixels[3 * i], 0.5 / M_PI * 2.0 * 0.8, 1e-4);
+
+  GiLight spot = test::pointLight(glm::vec3(0, 1.0f, 0), 3.0f);
+  spot.type = GI_LIGHT_SPOT;
+  spot.direction[0] = 0; spot.direction[1] = -1; spot.direction[2] = 0;
+  spot.falloff = GI_SPOT_FALLOFF_COSINE;
+  spot.cos_outer = 0.0f;
+  scene.lights = {spot};
+  scene.lightNames = {"spot"};
+  Image s = render(scene, cam, o, 1024, nullptr, 1024);  // NEE is exact: only pixel jitter varies
+  GiView v = makeCameraView(cam, o.width, o.height);
+  glm::mat4 inv;
+  std::memcpy(&inv, v.inv_view_proj, 64);
+  for (int py = 0; py < o.height; ++py)
+    for (int px = 0; px < o.width; ++px) {
+      double expected = 0.0;
+      for (int sy = 0; sy < 8; ++sy)
+        for (int sx = 0; sx < 8; ++sx) {
+          glm::vec4 f = inv * glm::vec4((px + (sx + 0.5f) / 8) / o.width * 2 - 1,
+                                        1 - (py + (sy + 0.5f) / 8) / o.height * 2, 1, 1);
+          glm::vec3 d = glm::normalize(glm::vec3(f) / f.w - cam.position);
+          glm::vec3 x = cam.position + d * (-cam.position.y / d.y);
+          double d2 = glm::dot(x - glm::vec3(0, 1, 0), x - glm::vec3(0, 1, 0));
+          expected += 0.5 / M_PI * 3.0 * 1.0 / (d2 * d2) / 64.0;
+        }
+      ASSERT_NEAR(s.at(px, py)[0], expected, 0.01 * expected) << px << "," << py;
+    }
+}
+
 // A huge emissive ceiling (radiance Le) 1 m above a diffuse floor: irradiance π·Le, so the floor's
 // direct radiance is ρ·Le. Exercises triangle-light NEE, BSDF-hit emission and their MIS weights.
 TEST(ReferencePathTracer, EmissiveCeilingGivesAlbedoTimesRadiance) {
