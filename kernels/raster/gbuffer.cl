@@ -8,61 +8,11 @@
 #include "raster/view.h"
 #include "common/vector_width.h"
 
-typedef struct {
-  float3 position;
-  float3 geoNormal;     // face normal, turned towards the viewer
-  float3 normal;        // interpolated vertex normal, same side as geoNormal
-  float4 tangent;
-  float2 uv;
-  float lod;            // texture level of detail (ray-cone footprint of the pixel)
-  float cosView;        // |cos| between the view ray and the face
-  uint material;
-} SurfaceHit;
-
-inline SurfaceHit resolve_hit(const GiView* view, int px, int py, uint triangle, global const float4* positions,
-                              global const float4* normals, global const float4* tangents, global const float2* uvs,
-                              global const uint4* triangles, global const GiMaterial* materials,
-                              global const GiTexture* textures) {
-  SurfaceHit h;
-  uint4 tri = triangles[triangle];
-  float3 p0 = positions[tri.x].xyz, p1 = positions[tri.y].xyz, p2 = positions[tri.z].xyz;
-  float3 o, d;
-  view_pixel_ray(view, (float)px + 0.5f, (float)py + 0.5f, &o, &d);
-  float3 tuv = ray_triangle_barycentrics(o, d, p0, p1, p2);
-  float b1 = tuv.y, b2 = tuv.z, b0 = 1.0f - b1 - b2;
-  h.position = o + d * tuv.x;
-  float3 fn = cross(p1 - p0, p2 - p0);
-  float worldArea2 = length(fn);
-  h.geoNormal = worldArea2 > 0.0f ? fn / worldArea2 : (float3)(0.0f, 0.0f, 1.0f);
-  h.normal = safe_normalize(b0 * normals[tri.x].xyz + b1 * normals[tri.y].xyz + b2 * normals[tri.z].xyz, h.geoNormal);
-  if (dot(h.normal, h.geoNormal) < 0.0f) h.normal = -h.normal;  // mirrored instances, bad files
-  if (dot(h.geoNormal, d) > 0.0f) {  // seen from the back (double-sided or shadow views)
-    h.geoNormal = -h.geoNormal;
-    h.normal = -h.normal;
-  }
-  h.tangent = b0 * tangents[tri.x] + b1 * tangents[tri.y] + b2 * tangents[tri.z];
-  float2 uv0 = uvs[tri.x], uv1 = uvs[tri.y], uv2 = uvs[tri.z];
-  h.uv = b0 * uv0 + b1 * uv1 + b2 * uv2;
-  h.material = tri.w;
-  h.cosView = fabs(dot(h.geoNormal, d));
-  // Level of detail: texels per pixel footprint. The footprint side at view depth z is
-  // z·texel_world_size (perspective) or texel_world_size (orthographic), stretched by 1/cos on
-  // the surface. Textures of one material are assumed to share a size (the base colour's, else
-  // the normal map's, decides).
-  float2 du1 = uv1 - uv0, du2 = uv2 - uv0;
-  float uvArea2 = fabs(du1.x * du2.y - du2.x * du1.y);
-  float z = -mat4_mul(view->view, (float4)(h.position, 1.0f)).z;
-  float footprint = view->orthographic ? view->texel_world_size : view->texel_world_size * z;
-  float pixelArea2 = worldArea2 * fmax(h.cosView, 1e-3f) / fmax(footprint * footprint, 1e-30f);
-  global const GiMaterial* m = &materials[tri.w];
-  int lodTexture = m->base_color_tex >= 0 ? m->base_color_tex : m->normal_tex;
-  h.lod = texture_lod(textures, lodTexture, uvArea2, pixelArea2);
-  return h;
-}
-
-// ---- Lane-wise forms for the camera G-buffer (GI_VW adjacent pixels of a row per work-item) ----
-// The same formulas as resolve_hit(), sample_texture(), eval_material() and apply_normal_map(),
-// written over floatV lanes with gathers for per-triangle, per-material and per-texel data.
+// Both kernels handle GI_VW adjacent pixels of a row per work-item (16 lanes on CPU devices, 1 on
+// GPUs). Per pixel: ray through the pixel centre (view_pixel_ray), ray-plane barycentrics with the
+// source triangle (ray_triangle_barycentrics), interpolated attributes, ray-cone texture level of
+// detail (texture_lod), then sample_texture(), eval_material() and apply_normal_map() of common/,
+// all written over floatV lanes with gathers for per-triangle, per-material and per-texel data.
 
 typedef struct {
   floatV x, y, z, w;
@@ -138,7 +88,7 @@ typedef struct {
   uintV triangle;  // t with background lanes replaced by 0
 } SurfaceV;
 
-// resolve_hit() + eval_material() (+ apply_normal_map() when normalMap) for GI_VW pixels of row
+// Surface attributes + eval_material() (+ apply_normal_map() when normalMap) for GI_VW pixels of row
 // py starting at px0, lane-wise. Lanes where surface is false are computed on triangle 0 and must
 // be discarded by the caller.
 inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, intV surface, bool normalMap,
@@ -217,7 +167,10 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
   floatV u2 = GI_GATHER(floatV, uvF, i2 * 2u), v2 = GI_GATHER(floatV, uvF, i2 * 2u + 1u);
   floatV u = b0 * u0 + b1 * u1 + b2 * u2, v = b0 * v0 + b1 * v1 + b2 * v2;
   floatV cosView = fabs(dotV(geoN, d));
-  // Level of detail (see resolve_hit()).
+  // Level of detail: texels per pixel footprint. The footprint side at view depth z is
+  // z·texel_world_size (perspective) or texel_world_size (orthographic), stretched by 1/cos on
+  // the surface. Textures of one material are assumed to share a size (the base colour's, else
+  // the normal map's, decides).
   floatV du1x = u1 - u0, du1y = v1 - v0, du2x = u2 - u0, du2y = v2 - v0;
   floatV uvArea2 = fabs(du1x * du2y - du2x * du1y);
   const float* Vm = view.view;
