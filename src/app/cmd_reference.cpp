@@ -5,10 +5,10 @@
 // - Ctrl-C (SIGINT) stops after the launch in flight, writes the image so far (normalised by the
 //   samples done, and the variance if asked), says so, and exits with status 130.
 // - Cache: a finished reference is kept in <program cache dir>/references/<key>.exr (+ .var.exr),
-//   the key hashing the scene (builtin name, or the scene file's bytes plus the names and sizes of
-//   the files beside it, which covers glTF buffers and textures without reading them), camera,
-//   size, mode, spp, bounces, seed, diffuse-only and the expanded kernel source. A hit is copied
-//   to --out at once. --no-cache neither reads nor writes it. Interrupted renders are not cached.
+//   the key hashing the scene (builtin name, or the scene file's bytes, plus the names and sizes of
+//   the buffers and images a .gltf refers to, and for a scene config the glTF it names), camera, size, mode, spp, bounces, seed, diffuse-only and the
+//   expanded kernel source. It is looked up before loading the scene, and a hit is copied to
+//   --out at once. --no-cache neither reads nor writes it. Interrupted renders are not cached.
 // - Samples per launch adapt so one launch takes about 0.3 s; results do not depend on it.
 // Hidden `gi export-scene SCENE --out DIR`: the flattened scene as one OBJ per instance plus
 // scene.json (materials, cameras, lights), for bench/cross_check_mitsuba.py.
@@ -54,18 +54,49 @@ std::string lowerExt(const std::string& path) {
   return e;
 }
 
-// What identifies the scene's content cheaply (see the file comment).
+// What identifies the scene's content cheaply (see the file comment): the file's bytes; for a
+// .gltf also the names and sizes of the buffers and images it refers to (not their bytes: Sponza's
+// textures are hundreds of MB); for a scene config also the glTF it names.
+std::string fileIdentity(const std::filesystem::path& file) {
+  std::string text = readTextFile(file);
+  std::ostringstream id;
+  id << "file|" << std::hex << fnv1a64(text) << std::dec;
+  if (lowerExt(file.string()) == ".gltf") {
+    try {
+      auto j = nlohmann::json::parse(text);
+      for (const char* list : {"buffers", "images"}) {
+        if (!j.contains(list) || !j[list].is_array()) continue;
+        for (auto& e : j[list]) {
+          if (!e.contains("uri") || !e["uri"].is_string()) continue;
+          std::string uri = e["uri"].get<std::string>();
+          if (uri.rfind("data:", 0) == 0) continue;  // embedded: already in the file's bytes
+          std::error_code ec;
+          auto size = std::filesystem::file_size(file.parent_path() / uri, ec);
+          id << "|" << uri << ":" << (ec ? -1 : int64_t(size));
+        }
+      }
+    } catch (const std::exception&) {
+      // Malformed glTF fails in loadScene with a proper message.
+    }
+  }
+  return id.str();
+}
+
 std::string sceneIdentity(const std::string& spec, const std::string& media) {
   if (spec.empty() || spec == "cornell" || spec.rfind("builtin:", 0) == 0) return "builtin|" + spec;
   std::filesystem::path file = resolveMediaFile(spec, media);
-  std::ostringstream id;
-  id << "file|" << std::hex << fnv1a64(readTextFile(file)) << std::dec;
-  std::vector<std::string> siblings;
-  for (auto& e : std::filesystem::directory_iterator(file.parent_path()))
-    if (e.is_regular_file()) siblings.push_back(e.path().filename().string() + ":" + std::to_string(e.file_size()));
-  std::sort(siblings.begin(), siblings.end());
-  for (auto& s : siblings) id << "|" << s;
-  return id.str();
+  std::string id = fileIdentity(file);
+  if (lowerExt(file.string()) == ".json") {
+    try {
+      auto j = nlohmann::json::parse(readTextFile(file));
+      if (j.contains("gltf") && j["gltf"].is_string())
+        id += "||" + fileIdentity(resolveMediaFile(j["gltf"].get<std::string>(), media, {file.parent_path()}));
+      if (j.contains("builtin") && j["builtin"].is_string()) id += "||builtin|" + j["builtin"].get<std::string>();
+    } catch (const std::exception&) {
+      // An unreadable config fails in loadScene with a proper message; no cache key needed.
+    }
+  }
+  return id;
 }
 
 std::string hex16(uint64_t v) {
@@ -93,26 +124,16 @@ void run(const ReferenceArgs& a) {
     throw Error("--variance '" + a.variance + "': use .exr");
   ReferenceMode mode = parseReferenceMode(a.mode);
 
-  Scene scene = loadScene(a.scene, a.common.media);
-  const Camera& cam = selectCamera(scene, a.camera);
-  PathTracerOptions o;
-  o.width = a.width > 0 ? a.width : scene.defaultWidth;
-  o.height = a.height > 0 ? a.height : scene.defaultHeight;
-  o.maxBounces = a.maxBounces;
-  o.mode = mode;
-  o.diffuseOnly = a.diffuseOnly;
-  o.seed = a.seed;
-
-  // Cache key.
+  // The cache is looked up before the scene is loaded (a hit must be instant): the key names the
+  // camera, size and scene as given on the command line; the scene's content hash covers what
+  // the defaults (default camera, size) are taken from.
   std::filesystem::path cacheExr, cacheVar;
   std::string cacheDir = cl::Context::cacheDirectory();
   if (!a.noCache && !cacheDir.empty()) {
     std::ostringstream k;
-    k << sceneIdentity(a.scene, a.common.media) << "|cam " << cam.name << " " << cam.position.x << ","
-      << cam.position.y << "," << cam.position.z << " " << cam.target.x << "," << cam.target.y << "," << cam.target.z
-      << " " << cam.up.x << "," << cam.up.y << "," << cam.up.z << " " << cam.yfov << "|" << o.width << "x" << o.height
-      << "|" << referenceModeName(mode) << "|spp " << a.spp << "|bounces " << o.maxBounces << "|seed " << o.seed
-      << "|diffuse " << o.diffuseOnly << "|code " << hex16(pathTracerCodeHash());
+    k << sceneIdentity(a.scene, a.common.media) << "|camera " << a.camera << "|" << a.width << "x" << a.height
+      << "|" << referenceModeName(mode) << "|spp " << a.spp << "|bounces " << a.maxBounces << "|seed " << a.seed
+      << "|diffuse " << a.diffuseOnly << "|code " << hex16(pathTracerCodeHash());
     std::string key = hex16(fnv1a64(k.str()));
     std::filesystem::path dir = std::filesystem::path(cacheDir) / "references";
     cacheExr = dir / (key + ".exr");
@@ -129,6 +150,16 @@ void run(const ReferenceArgs& a) {
       return;
     }
   }
+
+  Scene scene = loadScene(a.scene, a.common.media);
+  const Camera& cam = selectCamera(scene, a.camera);
+  PathTracerOptions o;
+  o.width = a.width > 0 ? a.width : scene.defaultWidth;
+  o.height = a.height > 0 ? a.height : scene.defaultHeight;
+  o.maxBounces = a.maxBounces;
+  o.mode = mode;
+  o.diffuseOnly = a.diffuseOnly;
+  o.seed = a.seed;
 
   cl::Context ctx(cl::selectDevice(a.common.device));
   PathTracer pt(ctx, scene, makeCameraView(cam, o.width, o.height), o);
