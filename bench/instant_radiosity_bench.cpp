@@ -5,7 +5,7 @@
 // machine is noisy; docs/PERFORMANCE.md records the numbers.
 //
 //   build/instant_radiosity_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 9]
-//                                 [--only vpl|igi|rsm]
+//                                 [--only vpl|igi|rsm|splat]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -31,7 +31,7 @@ double median(std::vector<double> v) {
 struct Args {
   std::string scene = "scenes/sponza.json";
   int frames = 9, warmup = 2, width = 640, height = 360;
-  std::string only;  // "vpl", "igi", "rsm" or "" (all)
+  std::string only;  // "vpl", "igi", "rsm", "splat" or "" (all)
 };
 
 // Runs frames, prints the technique's kernels (not the shared raster passes) and returns the
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
     else if (k == "--frames") a.frames = std::stoi(next());
     else if (k == "--only") a.only = next();
     else {
-      std::fprintf(stderr, "usage: instant_radiosity_bench [--scene S] [--width W --height H] [--frames N] [--only vpl|igi|rsm]\n");
+      std::fprintf(stderr, "usage: instant_radiosity_bench [--scene S] [--width W --height H] [--frames N] [--only vpl|igi|rsm|splat]\n");
       return 2;
     }
   }
@@ -128,6 +128,10 @@ int main(int argc, char** argv) {
             "igi " + std::to_string(n) + "x" + std::to_string(m) + ", N=256");
     if (want("rsm"))
       bench(ctx, scene, a, "rsm", {"rsm.samples=400", "rsm.downsample=2"}, "rsm gather, 400 samples, half resolution");
+    if (want("splat")) {
+      bench(ctx, scene, a, "splat", {"splat.count=256"}, "splat, N=256, default epsilon 1/256");
+      bench(ctx, scene, a, "splat", {"splat.count=256", "splat.epsilon=1e-4"}, "splat, N=256, epsilon 1e-4");
+    }
     if (!want("vpl")) return 0;
     // d_min bias: mean indirect with the default clamp vs a clamp 100x smaller (≈ no clamp).
     double withClamp = meanIndirect(ctx, scene, a, {"vpl.count=256"});

@@ -2,6 +2,7 @@
 #include "gi/technique.h"
 #include "gi/vpl/techniques.h"
 #include "gi/rsm/rsm_technique.h"
+#include "gi/splat/splat_technique.h"
 
 namespace gi {
 
@@ -10,6 +11,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       vplTechniqueInfo(),
       igiTechniqueInfo(),
       rsmTechniqueInfo(),
+      splatTechniqueInfo(),
   };
   return registry;
 }

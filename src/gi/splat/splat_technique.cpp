@@ -1,0 +1,77 @@
+// `splat`: splatting indirect illumination (Dachsbacher & Stamminger 2006; ALGORITHMS.md §2.4)
+// as tiled VPL culling — kernels/gi/splat/splat.cl. docs/techniques/splat.md.
+#include <memory>
+
+#include "gi/splat/splat_technique.h"
+#include "gi/vpl/vpl_lights.h"
+
+namespace gi {
+
+namespace {
+
+constexpr int kTile = 16;
+
+class SplatTechnique : public Technique {
+public:
+  std::string name() const override { return "splat"; }
+  bool needsRsm() const override { return true; }
+  void setup(const FrameResources& f) override {
+    generator_ = std::make_unique<VplGenerator>(f.ctx, "splat: vpl");
+    program_ = f.ctx.buildProgram("kernels/gi/splat/splat.cl");
+    bounds_ = program_.kernel("splat_bounds");
+    bin_ = program_.kernel("splat_bin");
+    shade_ = program_.kernel("splat_shade");
+  }
+  void render(const FrameResources& f, cl::Buffer& indirect) override {
+    const ParamSet& p = f.params;
+    float eps = p.getFloat("splat.epsilon");
+    generator_->generate(f.rsms, p.getInt("splat.count"), p.getFloat("splat.d_min"), vpls_);
+    const GBuffer& g = f.gbuffer;
+    int tilesX = (g.width + kTile - 1) / kTile, tilesY = (g.height + kTile - 1) / kTile;
+    int count = std::max(vpls_.count, 1);
+    if (count != capacity_ || tilesX * tilesY != tiles_) {
+      rects_ = cl::Buffer(f.ctx, size_t(count) * 16, CL_MEM_READ_WRITE, "splat VPL tile rectangles");
+      lists_ = cl::Buffer(f.ctx, size_t(count) * tilesX * tilesY * 4, CL_MEM_READ_WRITE, "splat tile lists");
+      counts_ = cl::Buffer(f.ctx, size_t(tilesX) * tilesY * 4, CL_MEM_READ_WRITE, "splat tile counts");
+      capacity_ = count;
+      tiles_ = tilesX * tilesY;
+    }
+    if (vpls_.count == 0) {
+      f.ctx.fill(indirect, 0.0f);
+      return;
+    }
+    bounds_.args(g.view, vpls_.vpls, vpls_.count, eps, tilesX, tilesY, rects_);
+    f.ctx.launch(bounds_, cl::NDRange::d1(cl::roundUp(vpls_.count, 64), 64), "splat: bounds");
+    bin_.args(rects_, vpls_.count, tilesX, tilesY, lists_, counts_);
+    f.ctx.launch(bin_, cl::NDRange::d1(cl::roundUp(tiles_, 16), 16), "splat: bin");
+    int vw = f.ctx.vectorWidth();
+    shade_.args(g.width, g.height, tilesX, g.position, g.normal, g.albedo, vpls_.vpls, vpls_.count, eps, lists_,
+                counts_, indirect);
+    size_t gx = size_t(tilesX) * kTile / vw;
+    size_t lx = vw == 1 ? 16 : 1;
+    f.ctx.launch(shade_, cl::NDRange::d2(gx, size_t(tilesY) * kTile, lx, 16), "splat: shade");
+  }
+
+private:
+  std::unique_ptr<VplGenerator> generator_;
+  cl::Program program_;
+  cl::Kernel bounds_, bin_, shade_;
+  cl::Buffer rects_, lists_, counts_;
+  VplSet vpls_;
+  int capacity_ = 0, tiles_ = 0;
+};
+
+}  // namespace
+
+TechniqueInfo splatTechniqueInfo() {
+  return {"splat", "splatting indirect illumination as tiled VPL culling (influence radius d_min/sqrt(eps)), no visibility",
+          [](ParamSet& p) {
+            p.addInt("splat.count", 256, 1, 4096, "VPLs per light");
+            p.addFloat("splat.epsilon", 1.0 / 256.0, 1e-12, 1.0,
+                       "cut-off: a VPL is dropped where E_p < epsilon x its value at d_min (radius d_min/sqrt(eps))");
+            p.addFloat("splat.d_min", 0.0, 0.0, 100.0, "distance clamp in metres; 0 = 0.5 x RSM texel footprint");
+          },
+          [] { return std::make_unique<SplatTechnique>(); }};
+}
+
+}  // namespace gi
