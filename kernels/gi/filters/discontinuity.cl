@@ -7,10 +7,12 @@
 // quantity is irradiance E; the output is the radiance L = ρ/π · E (the albedo is applied after
 // filtering, so texture detail stays sharp).
 //
-// One pixel per work-item with the window loops fully unrolled (compile-time GI_FX, GI_FY): no
-// loop remains, so PoCL vectorises across work-items (PERFORMANCE_FACTS.md points 1 and 7).
+// Two passes (below): a padded SoA copy, then GI_VW pixels of a row per work-item with the window
+// loops unrolled (compile-time GI_FX, GI_FY) and one vector load per plane and offset
+// (PERFORMANCE_FACTS.md points 2, 6, 7).
 #include "common/math.h"
 #include "common/shared_types.h"
+#include "common/vector_width.h"
 
 #ifndef GI_FX
 #define GI_FX 4
@@ -19,41 +21,135 @@
 #define GI_FY 4
 #endif
 
-kernel void discontinuity_filter(int width, int height, global const float4* irradiance,
-                                 global const float* depth, global const float4* geoNormal,
-                                 global const uint* instance, global const float4* albedo, float tauZ,
-                                 float cosTauN, int sameInstance, global float4* out) {
-  int x = get_global_id(0), y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  size_t i = (size_t)y * width + x;
-  uint id = instance[i];
-  if (id == GI_INVALID_ID) {
-    out[i] = (float4)(0.0f);
-    return;
-  }
-  float z = depth[i];
-  float3 n = geoNormal[i].xyz;
-  float3 sum = (float3)(0.0f);
-  float wsum = 0.0f;
-#pragma unroll
-  for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
-#pragma unroll
-    for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
-      int qx = x + dx, qy = y + dy;
-      if (qx >= 0 && qx < width && qy >= 0 && qy < height) {
-        size_t q = (size_t)qy * width + qx;
-        uint qid = instance[q];
-        bool ok = qid != GI_INVALID_ID && fabs(depth[q] - z) <= tauZ * z && dot(geoNormal[q].xyz, n) >= cosTauN &&
-                  (sameInstance == 0 || qid == id);
-        if (ok) {
-          sum += irradiance[q].xyz;
-          wsum += 1.0f;
-        }
-      }
+// Pass 1 (16 pixels per work-item on every device): copy what the filter reads into padded float planes
+// (SoA, GI_FILTER_PAD floats of margin before and after) so that pass 2 can load 16 neighbours
+// of a row with one unaligned vector load: E r, g, b; view depth; geometric normal x, y, z;
+// instance id (as uint bits).
+#define GI_FILTER_PAD 64
+kernel void discontinuity_prepare(int width, int height, global const float4* irradiance, global const float* depth,
+                                  global const float4* geoNormal, global const uint* instance, global float* planes) {
+  size_t g = get_global_id(0);
+  size_t n = (size_t)width * height;
+  size_t i0 = g * 16;
+  if (i0 >= n) return;
+  size_t L = n + 2 * GI_FILTER_PAD;
+  global float* o = planes + GI_FILTER_PAD + i0;
+  if (i0 + 16 <= n) {
+    // 16 pixels: four float16 loads per float4 plane, transposed by swizzles (no gathers).
+    global const float* e = (global const float*)(irradiance + i0);
+    float16 a = vload16(0, e), b = vload16(1, e), c = vload16(2, e), d = vload16(3, e);
+    vstore16((float16)(a.s048c, b.s048c, c.s048c, d.s048c), 0, o);
+    vstore16((float16)(a.s159d, b.s159d, c.s159d, d.s159d), 0, o + L);
+    vstore16((float16)(a.s26ae, b.s26ae, c.s26ae, d.s26ae), 0, o + 2 * L);
+    vstore16(vload16(0, depth + i0), 0, o + 3 * L);
+    global const float* q = (global const float*)(geoNormal + i0);
+    a = vload16(0, q);
+    b = vload16(1, q);
+    c = vload16(2, q);
+    d = vload16(3, q);
+    vstore16((float16)(a.s048c, b.s048c, c.s048c, d.s048c), 0, o + 4 * L);
+    vstore16((float16)(a.s159d, b.s159d, c.s159d, d.s159d), 0, o + 5 * L);
+    vstore16((float16)(a.s26ae, b.s26ae, c.s26ae, d.s26ae), 0, o + 6 * L);
+    vstore16(vload16(0, instance + i0), 0, (global uint*)(o + 7 * L));
+  } else {
+    for (size_t i = i0; i < n; ++i) {
+      global float* p = planes + GI_FILTER_PAD + i;
+      float4 e = irradiance[i], gn = geoNormal[i];
+      p[0] = e.x;
+      p[L] = e.y;
+      p[2 * L] = e.z;
+      p[3 * L] = depth[i];
+      p[4 * L] = gn.x;
+      p[5 * L] = gn.y;
+      p[6 * L] = gn.z;
+      ((global uint*)p)[7 * L] = instance[i];
     }
   }
-  float3 e = wsum > 0.0f ? sum / wsum : irradiance[i].xyz;
-  out[i] = (float4)(albedo[i].xyz * (e * GI_INV_PI), 0.0f);
+}
+
+#if GI_VW == 1
+#define FSEL(a, b, c) ((c) ? (b) : (a))
+#define FLOAD(p) (*(p))
+#define ULOAD(p) (*(p))
+#else
+#define FSEL(a, b, c) select(a, b, c)
+#define FLOAD(p) vloadV(0, p)
+#define ULOAD(p) vloadV(0, p)
+#endif
+
+// Pass 2: GI_VW adjacent pixels of a row per work-item; every window offset is one unaligned
+// vector load per plane, lanes outside the image masked (the planes' margins keep the loads in
+// bounds). Same test, same summation order (dy outer, dx inner) as the host mirror in the tests.
+kernel void discontinuity_filter(int width, int height, global const float* planes, global const float4* albedo,
+                                 float tauZ, float cosTauN, int sameInstance, global float4* out) {
+  int gx = get_global_id(0), y = get_global_id(1);
+  int x0 = gx * GI_VW;
+  if (x0 >= width || y >= height) return;
+  size_t L = (size_t)width * height + 2 * GI_FILTER_PAD;
+  global const float* pr = planes;
+  global const float* pg = planes + L;
+  global const float* pb = planes + 2 * L;
+  global const float* pz = planes + 3 * L;
+  global const float* pnx = planes + 4 * L;
+  global const float* pny = planes + 5 * L;
+  global const float* pnz = planes + 6 * L;
+  global const uint* pid = (global const uint*)(planes + 7 * L);
+  size_t c = GI_FILTER_PAD + (size_t)y * width + x0;
+  floatV z = FLOAD(pz + c), nx = FLOAD(pnx + c), ny = FLOAD(pny + c), nz = FLOAD(pnz + c);
+  uintV id = ULOAD(pid + c);
+  intV xl = x0 + GI_LANES;
+  floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), ws = (floatV)(0.0f);
+  floatV tz = tauZ * z;
+#pragma unroll
+  for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
+    int qy = y + dy;
+    if (qy < 0 || qy >= height) continue;
+#pragma unroll
+    for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
+      size_t q = (size_t)((long)GI_FILTER_PAD + (long)qy * width + x0 + dx);
+      intV qx = xl + dx;
+      uintV qid = ULOAD(pid + q);
+      floatV dz = fabs(FLOAD(pz + q) - z);
+      floatV dn = FLOAD(pnx + q) * nx + FLOAD(pny + q) * ny + FLOAD(pnz + q) * nz;
+#if GI_VW == 1
+      bool ok = qx >= 0 && qx < width && qid != GI_INVALID_ID && dz <= tz && dn >= cosTauN &&
+                (sameInstance == 0 || qid == id);
+      if (ok) {
+        sr += FLOAD(pr + q);
+        sg += FLOAD(pg + q);
+        sb += FLOAD(pb + q);
+        ws += 1.0f;
+      }
+#else
+      intV ok = (qx >= 0) & (qx < width) & (qid != GI_INVALID_ID) & (dz <= tz) & (dn >= cosTauN) &
+                ((intV)(sameInstance == 0 ? -1 : 0) | (qid == id));
+      sr += FSEL((floatV)(0.0f), FLOAD(pr + q), ok);
+      sg += FSEL((floatV)(0.0f), FLOAD(pg + q), ok);
+      sb += FSEL((floatV)(0.0f), FLOAD(pb + q), ok);
+      ws += FSEL((floatV)(0.0f), (floatV)(1.0f), ok);
+#endif
+    }
+  }
+#if GI_VW == 1
+  {
+    size_t i = (size_t)y * width + x0;
+    float3 e = ws > 0.0f ? (float3)(sr, sg, sb) / ws : (float3)(pr[c], pg[c], pb[c]);
+    out[i] = id == GI_INVALID_ID ? (float4)(0.0f) : (float4)(albedo[i].xyz * (e * GI_INV_PI), 0.0f);
+  }
+#else
+  float v[4][GI_VW];
+  vstoreV(sr, 0, v[0]);
+  vstoreV(sg, 0, v[1]);
+  vstoreV(sb, 0, v[2]);
+  vstoreV(ws, 0, v[3]);
+  for (int l = 0; l < GI_VW; ++l) {
+    if (x0 + l >= width) break;
+    size_t i = (size_t)y * width + x0 + l;
+    uint il = pid[c + l];
+    float3 e = v[3][l] > 0.0f ? (float3)(v[0][l], v[1][l], v[2][l]) / v[3][l] : (float3)(pr[c + l], pg[c + l], pb[c + l]);
+    out[i] = il == GI_INVALID_ID ? (float4)(0.0f) : (float4)(albedo[i].xyz * (e * GI_INV_PI), 0.0f);
+  }
+#endif
 }
 
 // Geometry-aware upsampling of irradiance computed at a reduced resolution (factor GI_UP, the

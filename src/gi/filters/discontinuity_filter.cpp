@@ -14,11 +14,23 @@ void DiscontinuityFilter::run(const GBuffer& g, const cl::Buffer& irradiance, in
     cl::Kernel k = p.kernel("discontinuity_filter");
     it = kernels_.emplace(key, std::make_pair(std::move(p), std::move(k))).first;
   }
+  cl::Program& prog = it->second.first;
   cl::Kernel& k = it->second.second;
+  if (!prepare_.get()) prepare_ = prog.kernel("discontinuity_prepare");
+  size_t L = size_t(g.width) * g.height + 2 * kPad;
+  if (!planes_ || planes_.bytes() != L * 8 * 4) {
+    planes_ = cl::Buffer(ctx_, L * 8 * 4, CL_MEM_READ_WRITE, label_ + " planes");
+    ctx_.fill(planes_, 0.0f);  // margins: zero depth/normal, instance 0 — always masked by the x/y tests
+  }
+  prepare_.args(g.width, g.height, irradiance, g.visibility.depth, g.geoNormal, g.instance, planes_);
+  size_t groups = (size_t(g.width) * g.height + 15) / 16;
+  ctx_.launch(prepare_, cl::NDRange::d1(cl::roundUp(groups, 8), 8), label_ + " (prepare)");
   float cosTauN = std::cos(t.tauNDegrees * 3.14159265f / 180.0f);
-  k.args(g.width, g.height, irradiance, g.visibility.depth, g.geoNormal, g.instance, g.albedo, t.tauZ, cosTauN,
-         int(t.sameInstance), out);
-  ctx_.launch(k, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 16), 16, 16), label_);
+  k.args(g.width, g.height, planes_, g.albedo, t.tauZ, cosTauN, int(t.sameInstance), out);
+  int vw = ctx_.vectorWidth();
+  size_t gx = (size_t(g.width) + vw - 1) / vw;
+  if (vw == 1) ctx_.launch(k, cl::NDRange::d2(cl::roundUp(gx, 16), cl::roundUp(g.height, 16), 16, 16), label_);
+  else ctx_.launch(k, cl::NDRange::d2(gx, cl::roundUp(g.height, 8), 1, 8), label_);
 }
 
 void GeometryAwareUpsampler::run(const GBuffer& g, const cl::Buffer& lowIrradiance, int factor, const GeometryTest& t,

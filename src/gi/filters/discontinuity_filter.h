@@ -29,6 +29,9 @@ private:
   cl::Context& ctx_;
   std::string label_;
   std::map<std::pair<int, int>, std::pair<cl::Program, cl::Kernel>> kernels_;  // per window size
+  cl::Kernel prepare_;
+  cl::Buffer planes_;  // padded SoA copy (kernels/gi/filters/discontinuity.cl, GI_FILTER_PAD)
+  static constexpr size_t kPad = 64;
 };
 
 class GeometryAwareUpsampler {
