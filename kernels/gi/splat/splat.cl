@@ -82,9 +82,14 @@ kernel void splat_bin(global const int4* rects, int count, int tilesX, int tiles
   counts[t] = n;
 }
 
+// Interleaved (n·m > 1): pixel class c = (x mod n) + n·(y mod m) receives only the VPLs of set c
+// (ordering 0 "stride": VPL k -> set k mod n·m; 1 "contiguous": set ⌊k / ⌈N/(n·m)⌉⌋), weight × n·m,
+// and the output is irradiance E (for the discontinuity filter) instead of L = ρ/π·E. The lanes
+// still evaluate every listed VPL (masked), so interleaving changes the result, not the cost.
 kernel void splat_shade(int width, int height, int tilesX, global const float* gPosition, global const float* gNormal,
                         global const float4* albedo, global const float4* vpls, int count, float epsilon,
-                        global const int* lists, global const int* counts, global float4* out) {
+                        global const int* lists, global const int* counts, int n, int m, int ordering,
+                        global float4* out) {
   int gx = get_global_id(0), y = get_global_id(1);
   int x0 = gx * GI_VW;
   if (x0 >= width || y >= height) return;
@@ -95,9 +100,12 @@ kernel void splat_shade(int width, int height, int tilesX, global const float* g
          pw = GATHER(gPosition, p4 + 3);
   floatV nx = GATHER(gNormal, p4), ny = GATHER(gNormal, p4 + 1), nz = GATHER(gNormal, p4 + 2);
   floatV er = (floatV)(0.0f), eg = (floatV)(0.0f), eb = (floatV)(0.0f);
+  int sets = n * m;
+  intV cls = (x0 + GI_LANES) % n + n * (y % m);
+  int perSet = (count + sets - 1) / sets;
   global const int* list = lists + (size_t)tile * count;
-  int n = counts[tile];
-  for (int j = 0; j < n; ++j) {
+  int listed = counts[tile];
+  for (int j = 0; j < listed; ++j) {
     int k = list[j];
     float4 a = vpls[3 * k], b = vpls[3 * k + 1], f = vpls[3 * k + 2];
     floatV vx = a.x - px, vy = a.y - py, vz = a.z - pz;
@@ -110,15 +118,24 @@ kernel void splat_shade(int width, int height, int tilesX, global const float* g
 #else
     g = select((floatV)(0.0f), g, d2 * epsilon < a.w);
 #endif
+    if (sets > 1) {
+      int set = ordering == 0 ? k % sets : k / perSet;
+#if GI_VW == 1
+      g = cls == set ? g : 0.0f;
+#else
+      g = select((floatV)(0.0f), g, cls == set);
+#endif
+    }
     er += f.x * g;
     eg += f.y * g;
     eb += f.z * g;
   }
+  float scale = (float)sets * GI_INV_PI;
 #if GI_VW == 1
   {
     size_t i = (size_t)y * width + x0;
-    float3 e = pw > 0.0f ? (float3)(er, eg, eb) * GI_INV_PI : (float3)(0.0f);
-    out[i] = (float4)(albedo[i].xyz * e * GI_INV_PI, 0.0f);
+    float3 e = pw > 0.0f ? (float3)(er, eg, eb) * scale : (float3)(0.0f);
+    out[i] = sets > 1 ? (float4)(e, 0.0f) : (float4)(albedo[i].xyz * e * GI_INV_PI, 0.0f);
   }
 #else
   float vals[4][GI_VW];
@@ -129,8 +146,8 @@ kernel void splat_shade(int width, int height, int tilesX, global const float* g
   for (int l = 0; l < GI_VW; ++l) {
     if (x0 + l >= width) break;
     size_t i = (size_t)y * width + x0 + l;
-    float3 e = vals[3][l] > 0.0f ? (float3)(vals[0][l], vals[1][l], vals[2][l]) * GI_INV_PI : (float3)(0.0f);
-    out[i] = (float4)(albedo[i].xyz * e * GI_INV_PI, 0.0f);
+    float3 e = vals[3][l] > 0.0f ? (float3)(vals[0][l], vals[1][l], vals[2][l]) * scale : (float3)(0.0f);
+    out[i] = sets > 1 ? (float4)(e, 0.0f) : (float4)(albedo[i].xyz * e * GI_INV_PI, 0.0f);
   }
 #endif
 }

@@ -2,6 +2,7 @@
 // as tiled VPL culling — kernels/gi/splat/splat.cl. docs/techniques/splat.md.
 #include <memory>
 
+#include "gi/filters/discontinuity_filter.h"
 #include "gi/splat/splat_technique.h"
 #include "gi/vpl/vpl_lights.h"
 
@@ -21,6 +22,7 @@ public:
     bounds_ = program_.kernel("splat_bounds");
     bin_ = program_.kernel("splat_bin");
     shade_ = program_.kernel("splat_shade");
+    filter_ = std::make_unique<DiscontinuityFilter>(f.ctx, "splat: discontinuity filter");
   }
   void render(const FrameResources& f, cl::Buffer& indirect) override {
     const ParamSet& p = f.params;
@@ -45,18 +47,31 @@ public:
     bin_.args(rects_, vpls_.count, tilesX, tilesY, lists_, counts_);
     f.ctx.launch(bin_, cl::NDRange::d1(cl::roundUp(tiles_, 16), 16), "splat: bin");
     int vw = f.ctx.vectorWidth();
+    int n = p.getInt("splat.n"), m = p.getInt("splat.m");
+    int ordering = p.getChoice("splat.ordering") == "stride" ? 0 : 1;
+    bool interleaved = n * m > 1;
+    size_t bytes = size_t(g.width) * g.height * 16;
+    if (interleaved && (!irradiance_ || irradiance_.bytes() != bytes))
+      irradiance_ = cl::Buffer(f.ctx, bytes, CL_MEM_READ_WRITE, "splat irradiance");
     shade_.args(g.width, g.height, tilesX, g.position, g.normal, g.albedo, vpls_.vpls, vpls_.count, eps, lists_,
-                counts_, indirect);
+                counts_, n, m, ordering, interleaved ? irradiance_ : indirect);
     size_t gx = size_t(tilesX) * kTile / vw;
     size_t lx = vw == 1 ? 16 : 1;
     f.ctx.launch(shade_, cl::NDRange::d2(gx, size_t(tilesY) * kTile, lx, 16), "splat: shade");
+    if (interleaved) {
+      GeometryTest t;
+      t.tauZ = p.getFloat("splat.tau_z");
+      t.tauNDegrees = p.getFloat("splat.tau_n");
+      filter_->run(g, irradiance_, n, m, t, indirect);
+    }
   }
 
 private:
   std::unique_ptr<VplGenerator> generator_;
   cl::Program program_;
   cl::Kernel bounds_, bin_, shade_;
-  cl::Buffer rects_, lists_, counts_;
+  cl::Buffer rects_, lists_, counts_, irradiance_;
+  std::unique_ptr<DiscontinuityFilter> filter_;
   VplSet vpls_;
   int capacity_ = 0, tiles_ = 0;
 };
@@ -70,6 +85,12 @@ TechniqueInfo splatTechniqueInfo() {
             p.addFloat("splat.epsilon", 1.0 / 256.0, 1e-12, 1.0,
                        "cut-off: a VPL is dropped where E_p < epsilon x its value at d_min (radius d_min/sqrt(eps))");
             p.addFloat("splat.d_min", 0.0, 0.0, 100.0, "distance clamp in metres; 0 = 0.5 x RSM texel footprint");
+            p.addInt("splat.n", 1, 1, 8, "interleave pattern width (1 x 1 = not interleaved)");
+            p.addInt("splat.m", 1, 1, 8, "interleave pattern height");
+            p.addChoice("splat.ordering", "stride", {"stride", "contiguous"},
+                        "VPL-to-set assignment: stride = k mod n*m (Halton order), contiguous = consecutive blocks");
+            p.addFloat("splat.tau_z", 0.05, 0.0, 10.0, "filter (interleaved): relative view-depth tolerance");
+            p.addFloat("splat.tau_n", 25.0, 0.0, 180.0, "filter (interleaved): geometric-normal tolerance in degrees");
           },
           [] { return std::make_unique<SplatTechnique>(); }};
 }
