@@ -10,8 +10,10 @@
 //   - error against the path-traced one-bounce reference (diffuse only): SSIM of the display
 //     images, relMSE of the linear indirect images.
 // Gather = `vpl` (1×1) and `igi` (n×m): all-pairs VPL gathering, interleaved. Splatting = `splat`
-// (un-interleaved only: interleaved splatting is not implemented). `rsm` (RSM gather with N
-// samples per pixel, half resolution) is timed and compared un-interleaved.
+// un-interleaved and interleaved (ε = 1e-4; both VPL-to-set orderings; rows marked
+// "[vs splat 1x1]" compare with the un-interleaved splat, the thesis's SII comparison; interleaved
+// splatting is masked per lane, so its time is not an interleaving speed-up). `rsm` (RSM gather
+// with N samples per pixel, half resolution) is timed and compared un-interleaved.
 // Scene: the Cornell box with blocks under the downward spot light (as in the tests), indirect
 // light only. Prints markdown tables (docs/results/interleaving.md records a run).
 //
@@ -129,6 +131,15 @@ int main(int argc, char** argv) {
       row("splat eps=1/256", "1x1", sp, base);
       Result sp4 = run(ctx, s, size, frames, "splat", {"splat.count=" + N, "splat.epsilon=1e-4"});
       row("splat eps=1e-4", "1x1", sp4, base);
+      // Interleaved splatting against the un-interleaved splat (the thesis's SII comparison).
+      for (const char* ord : {"stride", "contiguous"})
+        for (auto [pn, pm] : patterns) {
+          Result r = run(ctx, s, size, frames, "splat",
+                         {"splat.count=" + N, "splat.epsilon=1e-4", "splat.n=" + std::to_string(pn),
+                          "splat.m=" + std::to_string(pm), std::string("splat.ordering=") + ord});
+          row((std::string("splat eps=1e-4 ") + ord + " [vs splat 1x1]").c_str(),
+              std::to_string(pn) + "x" + std::to_string(pm), r, sp4);
+        }
       Result rg = run(ctx, s, size, frames, "rsm", {"rsm.samples=" + N});
       row("rsm gather (N samples, half res)", "1x1", rg, base);
     }
