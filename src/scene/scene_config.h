@@ -4,7 +4,7 @@
 //   {
 //     "comment": "free text, ignored",
 //     "gltf": "sponza/Sponza.gltf",          // config's directory, then the media search path
-//     "builtin": "cornell",                  // instead of "gltf": cornell | cornell_empty
+//     "builtin": "cornell",                  // instead of "gltf": cornell | cornell_empty | thin_wall
 //     "replace_file_lights": false,          // true: drop the file's KHR_lights_punctual lights
 //                                            // (emissive stand-ins stay: their geometry stays)
 //     "lights": [

@@ -10,6 +10,7 @@
 #include "scene/gltf_loader.h"
 #include "scene/media_path.h"
 #include "scene/scene_config.h"
+#include "scene/thin_wall.h"
 #include "util/error.h"
 
 namespace gi {
@@ -24,7 +25,8 @@ Scene makeBuiltinScene(const std::string& name) {
     s.source = "builtin:cornell_empty";
     return s;
   }
-  throw Error("unknown built-in scene '" + name + "' (built-in scenes: cornell, cornell_empty)");
+  if (name == "thin_wall") return makeThinWallScene();
+  throw Error("unknown built-in scene '" + name + "' (built-in scenes: cornell, cornell_empty, thin_wall)");
 }
 
 Scene loadScene(const std::string& spec, const std::string& mediaDirFlag) {

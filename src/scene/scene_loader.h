@@ -2,6 +2,7 @@
 //
 //   spec "" | "cornell" | "builtin:cornell"  -> the built-in Cornell box (cornell_box.h)
 //   "builtin:cornell_empty"                  -> the Cornell box without its two blocks
+//   "builtin:thin_wall"                      -> two rooms split by a 2 cm wall (thin_wall.h)
 //   *.gltf | *.glb                           -> glTF 2.0 file (gltf_loader.h)
 //   *.json                                   -> scene config (scene_config.h)
 //
@@ -17,7 +18,7 @@ namespace gi {
 
 Scene loadScene(const std::string& spec, const std::string& mediaDirFlag);
 
-// Built-in scenes by name ("cornell", "cornell_empty"); throws gi::Error listing the names.
+// Built-in scenes by name ("cornell", "cornell_empty", "thin_wall"); throws gi::Error listing the names.
 Scene makeBuiltinScene(const std::string& name);
 
 }  // namespace gi
