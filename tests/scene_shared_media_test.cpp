@@ -2,12 +2,12 @@
 // glTF, Sponza and the Breakfast Room load silently with the documented counts, and the scene
 // configs in scenes/ parse and name files that exist. Skipped when the media are not there.
 //
-// SceneSharedMedia.SponzaLoadsWithinFiveSeconds is the slow one (~1-2 s on 2 cores, Release):
-// it decodes 49 textures of up to 2048².
+// SceneSharedMedia.SponzaLoadsWithDocumentedCounts is the slow one (~1-2 s on 2 cores, Release):
+// it decodes 49 textures of up to 2048². Its load time is printed, not asserted: the 5 s target is
+// checked by bench/frame_bench (speed targets live in benchmarks; this machine is noisy).
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -50,7 +50,7 @@ TEST(SceneSharedMedia, CornellGltfWithEmissiveStrength) {
   EXPECT_EQ(s.defaultWidth, s.defaultHeight);
 }
 
-TEST(SceneSharedMedia, SponzaLoadsWithinFiveSeconds) {
+TEST(SceneSharedMedia, SponzaLoadsWithDocumentedCounts) {
   const std::string file = "sponza/Sponza.gltf";
   if (!mediaHas(file)) GTEST_SKIP() << file << " not found on the media path";
   testing::internal::CaptureStderr();
@@ -60,15 +60,6 @@ TEST(SceneSharedMedia, SponzaLoadsWithinFiveSeconds) {
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << "loading prints nothing";
   std::printf("Sponza load: %.2f s, %zu triangles, %zu vertices, %zu textures\n", seconds, s.triangleCount(),
               s.positions.size(), s.textures.size());
-  // The 5 s budget is for this 2-core machine when the load has it to itself; other builds and
-  // tests running beside it (load average above the core count) stretch any wall-clock time.
-#ifdef NDEBUG
-  double load = 0;
-  if (getloadavg(&load, 1) == 1 && load > std::thread::hardware_concurrency())
-    std::printf("time bound not checked: load average %.1f on %u cores\n", load, std::thread::hardware_concurrency());
-  else
-    EXPECT_LE(seconds, 5.0);
-#endif
   EXPECT_EQ(s.triangleCount(), 262087u);
   EXPECT_EQ(s.cameras.size(), 4u);
   EXPECT_EQ(s.cameras[0].name, "CameraMain");

@@ -15,8 +15,8 @@
 //     only a sanity bound (SSIM ≥ 0.45; measured 0.517); the issue's 0.9 is not verified (the
 //     16-spp reference is too noisy to judge, a converged one too slow for CI). Skipped without media.
 // The rasterized images are rendered at 2×2 the size and box-filtered down (the path tracer
-// integrates over each pixel's area). GI_TEST_REFERENCE_SPP overrides the reference spp
-// (experiments only); GI_TEST_SAVE_IMAGES=<dir> writes the images.
+// integrates over each pixel's area). References come from tests/reference_store.h (stored, converged,
+// re-validated each run); GI_TEST_SAVE_IMAGES=<dir> writes the images.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -29,6 +29,7 @@
 #include "scene/cornell_box.h"
 #include "scene/media_path.h"
 #include "scene/scene_loader.h"
+#include "reference_store.h"
 #include "test_support.h"
 
 using namespace gi;
@@ -61,7 +62,7 @@ struct Pair {
 };
 
 Pair renderPair(const Scene& scene, int W, int H, std::vector<std::string> sets, bool indirectOnly, ReferenceMode mode,
-                bool diffuseOnly, int spp) {
+                bool diffuseOnly, const std::string& referenceKey, int fallbackSpp) {
   const int kSuper = 2;
   RenderSettings rs;
   rs.width = W * kSuper;
@@ -78,11 +79,7 @@ Pair renderPair(const Scene& scene, int W, int H, std::vector<std::string> sets,
   o.height = H;
   o.mode = mode;
   o.diffuseOnly = diffuseOnly;
-  o.seed = 1;
-  PathTracer pt(test::context(), scene, makeCameraView(r.camera(), W, H), o);
-  if (const char* e = std::getenv("GI_TEST_REFERENCE_SPP")) spp = std::atoi(e);  // experiments only
-  while (pt.samplesDone() < spp) pt.addSamples(std::min(64, spp - pt.samplesDone()));
-  p.reference = pt.image();
+  p.reference = test::convergedReference(referenceKey, scene, makeCameraView(r.camera(), W, H), o, fallbackSpp);
   if (const char* dir = std::getenv("GI_TEST_SAVE_IMAGES")) {
     std::string base = std::string(dir) + "/vpl_" + scene.name + (indirectOnly ? "_indirect" : "_full");
     writeImage(base + "_raster.exr", p.raster);
@@ -102,7 +99,8 @@ TEST(VplAccuracy, EmptyCornellBoxOneBounceMatchesPathTracer) {
   o.spotLight = CornellSpotLight{};
   o.spotLight->intensity = glm::vec3(1.2f, 1.0f, 0.8f);
   Scene s = makeCornellBox(o);
-  Pair p = renderPair(s, 128, 128, {"vpl.count=1024"}, true, ReferenceMode::OneBounce, true, 1024);
+  Pair p = renderPair(s, 128, 128, {"vpl.count=1024"}, true, ReferenceMode::OneBounce, true,
+                      "cornell_empty_spot_one_bounce_diffuse_128", 1024);
   double mr = meanOf(p.raster), mp = meanOf(p.reference);
   double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
   std::printf("empty Cornell box, one-bounce indirect, vpl N=1024: mean %.5f vs reference %.5f (%+.2f %%, bound 5 %%), "
@@ -117,7 +115,7 @@ TEST(VplAccuracy, FullCornellBoxFullImageSsim) {
   o.spotLight = CornellSpotLight{};
   o.spotLight->intensity = glm::vec3(1.2f, 1.0f, 0.8f);
   Scene s = makeCornellBox(o);
-  Pair p = renderPair(s, 128, 128, {"vpl.count=1024"}, false, ReferenceMode::Full, false, 1024);
+  Pair p = renderPair(s, 128, 128, {"vpl.count=1024"}, false, ReferenceMode::Full, false, "cornell_spot_full_128", 1024);
   double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
   std::printf("Cornell box (blocks), spot light, direct + vpl N=1024 vs full reference: SSIM %.4f (bound 0.80; issue target 0.9), "
               "mean %.5f vs %.5f\n", ssim, meanOf(p.raster), meanOf(p.reference));
@@ -132,7 +130,8 @@ TEST(VplAccuracy, SponzaSmallFullImageSsim) {
   } catch (const std::exception& e) {
     GTEST_SKIP() << "Sponza not loadable: " << e.what();
   }
-  Pair p = renderPair(s, 96, 54, {"vpl.count=256", "rsm.resolution=256"}, false, ReferenceMode::Full, false, 16);
+  Pair p = renderPair(s, 96, 54, {"vpl.count=256", "rsm.resolution=256"}, false, ReferenceMode::Full, false,
+                      "sponza_sun_full_96x54", 16);
   double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
   std::printf("Sponza 96x54, sun, direct + vpl N=256 vs full reference (16 spp): SSIM %.4f (sanity bound 0.45; issue target 0.9 not verified)\n", ssim);
   EXPECT_GE(ssim, 0.45);
