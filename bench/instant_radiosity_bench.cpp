@@ -18,56 +18,20 @@
 #include "render/renderer.h"
 #include "scene/cornell_box.h"
 #include "scene/scene_loader.h"
+#include "technique_timing.h"
 
 using namespace gi;
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-struct Args {
+struct Args : timing::FrameSettings {
   std::string scene = "scenes/sponza.json";
-  int frames = 9, warmup = 2, width = 640, height = 360;
   std::string only;  // "vpl", "igi", "rsm", "splat" or "" (all)
 };
 
-// Runs frames, prints the technique's kernels (not the shared raster passes) and returns the
-// median of the kernel named `key` (or -1).
 std::map<std::string, double> bench(cl::Context& ctx, const Scene& scene, const Args& a, const std::string& technique,
                                     std::vector<std::string> sets, const std::string& title) {
-  RenderSettings rs;
-  rs.width = a.width;
-  rs.height = a.height;
-  rs.technique = technique;
-  rs.sets = sets;
-  Renderer r(ctx, scene, rs);
-  for (int i = 0; i < a.warmup; ++i) r.renderFrame();
-  std::map<std::string, std::vector<double>> per;
-  std::vector<std::string> order;
-  for (int f = 0; f < a.frames; ++f)
-    for (auto& [name, ms] : r.renderFrame()) {
-      if (!per.count(name)) order.push_back(name);
-      per[name].push_back(ms);
-    }
-  std::printf("\n%s  (%s", title.c_str(), technique.c_str());
-  for (auto& s : sets) std::printf(" %s", s.c_str());
-  std::printf(")\n");
-  std::map<std::string, double> out;
-  double total = 0;
-  for (auto& name : order) {
-    double m = median(per[name]);
-    out[name] = m;
-    if (name.rfind(technique, 0) == 0) {
-      std::printf("  %-34s %8.3f ms\n", name.c_str(), m);
-      total += m;
-    }
-  }
-  std::printf("  %-34s %8.3f ms\n", "technique total", total);
-  out["__total"] = total;
-  return out;
+  return timing::timeTechnique(ctx, scene, a, technique, std::move(sets), title);
 }
 
 double meanIndirect(cl::Context& ctx, const Scene& scene, const Args& a, std::vector<std::string> sets) {

@@ -17,6 +17,7 @@
 #include "render/renderer.h"
 #include "render/views.h"
 #include "scene/cornell_box.h"
+#include "accuracy_support.h"
 #include "test_support.h"
 
 using namespace gi;
@@ -26,18 +27,7 @@ namespace {
 // The path tracer integrates over each pixel's area (anti-aliased); the rasterizer samples pixel
 // centres. To compare shading rather than edge aliasing, the rasterized image is rendered at 4×4
 // the resolution and box-filtered down, the same pixel filter the path tracer uses.
-Image boxDownsample(const Image& big, int factor) {
-  Image out(big.width / factor, big.height / factor, big.channels);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x)
-      for (int c = 0; c < big.channels; ++c) {
-        double sum = 0;
-        for (int j = 0; j < factor; ++j)
-          for (int i = 0; i < factor; ++i) sum += big.at(x * factor + i, y * factor + j)[c];
-        out.at(x, y)[c] = float(sum / (factor * factor));
-      }
-  return out;
-}
+using test::boxDown;
 
 double directPsnr(const Scene& scene, int spp) {
   const int W = 128, H = 128, kSuper = 4;
@@ -46,7 +36,7 @@ double directPsnr(const Scene& scene, int spp) {
   rs.height = H * kSuper;
   Renderer r(test::context(), scene, rs);
   r.renderFrame();
-  Image raster = boxDownsample(r.directRadiance(), kSuper);
+  Image raster = boxDown(r.directRadiance(), kSuper);
 
   PathTracerOptions o;
   o.width = W;

@@ -9,20 +9,14 @@
 #include "gi/vpl/vpl_lights.h"
 #include "render/renderer.h"
 #include "scene/cornell_box.h"
+#include "accuracy_support.h"
 #include "test_support.h"
 
 using namespace gi;
 
 namespace {
 
-Scene cornellWithSpot(bool blocks) {
-  CornellOptions o;
-  o.withBlocks = blocks;
-  o.withAreaLight = false;
-  o.spotLight = CornellSpotLight{};
-  o.spotLight->intensity = glm::vec3(1.2f, 1.0f, 0.8f);
-  return makeCornellBox(o);
-}
+using test::cornellWithSpot;
 
 RenderSettings settings(const std::string& technique, int w, int h, std::vector<std::string> sets) {
   RenderSettings rs;

@@ -16,7 +16,7 @@
 //     16-spp reference is too noisy to judge, a converged one too slow for CI). Skipped without media.
 // The rasterized images are rendered at 2×2 the size and box-filtered down (the path tracer
 // integrates over each pixel's area). References come from tests/reference_store.h (stored, converged,
-// re-validated each run); GI_TEST_SAVE_IMAGES=<dir> writes the images.
+// re-validated each run); GI_TEST_SAVE_IMAGES=<dir> writes the images (tests/accuracy_support.h).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -29,65 +29,20 @@
 #include "scene/cornell_box.h"
 #include "scene/media_path.h"
 #include "scene/scene_loader.h"
-#include "reference_store.h"
+#include "accuracy_support.h"
 #include "test_support.h"
 
 using namespace gi;
 
 namespace {
 
-Image boxDown(const Image& big, int f) {
-  Image out(big.width / f, big.height / f, big.channels);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x)
-      for (int c = 0; c < big.channels; ++c) {
-        double s = 0;
-        for (int j = 0; j < f; ++j)
-          for (int i = 0; i < f; ++i) s += big.at(x * f + i, y * f + j)[c];
-        out.at(x, y)[c] = float(s / (f * f));
-      }
-  return out;
-}
-
-double meanOf(const Image& im) {
-  double s = 0;
-  for (size_t i = 0; i < im.pixelCount(); ++i)
-    for (int c = 0; c < 3; ++c) s += im.pixels[i * im.channels + c];
-  return s / (3.0 * im.pixelCount());
-}
-
-struct Pair {
-  Image raster, reference;
-  Camera camera;
-};
+using Pair = test::AccuracyPair;
+using test::meanOf;
 
 Pair renderPair(const Scene& scene, int W, int H, std::vector<std::string> sets, bool indirectOnly, ReferenceMode mode,
                 bool diffuseOnly, const std::string& referenceKey, int fallbackSpp) {
-  const int kSuper = 2;
-  RenderSettings rs;
-  rs.width = W * kSuper;
-  rs.height = H * kSuper;
-  rs.technique = "vpl";
-  rs.sets = std::move(sets);
-  Renderer r(test::context(), scene, rs);
-  r.renderFrame();
-  Pair p;
-  p.raster = boxDown(indirectOnly ? r.indirectRadiance() : r.radiance(), kSuper);
-  p.camera = r.camera();
-  PathTracerOptions o;
-  o.width = W;
-  o.height = H;
-  o.mode = mode;
-  o.diffuseOnly = diffuseOnly;
-  p.reference = test::convergedReference(referenceKey, scene, makeCameraView(r.camera(), W, H), o, fallbackSpp);
-  if (const char* dir = std::getenv("GI_TEST_SAVE_IMAGES")) {
-    std::string base = std::string(dir) + "/vpl_" + scene.name + (indirectOnly ? "_indirect" : "_full");
-    writeImage(base + "_raster.exr", p.raster);
-    writeImage(base + "_reference.exr", p.reference);
-    writeImage(base + "_raster.png", displayTransform(p.raster, scene.exposure));
-    writeImage(base + "_reference.png", displayTransform(p.reference, scene.exposure));
-  }
-  return p;
+  return test::renderAgainstReference(scene, "vpl", W, H, std::move(sets), indirectOnly, mode, diffuseOnly,
+                                      referenceKey, fallbackSpp);
 }
 
 }  // namespace
@@ -123,13 +78,10 @@ TEST(VplAccuracy, FullCornellBoxFullImageSsim) {
 }
 
 TEST(VplAccuracy, SponzaSmallFullImageSsim) {
-  if (!findMediaDir("")) GTEST_SKIP() << "Sponza media not found (docs/SCENES.md)";
-  Scene s;
-  try {
-    s = loadScene(std::string(GI_SOURCE_DIR) + "/scenes/sponza.json", "");
-  } catch (const std::exception& e) {
-    GTEST_SKIP() << "Sponza not loadable: " << e.what();
-  }
+  std::string why;
+  std::optional<Scene> sponza = test::loadSponza(why);
+  if (!sponza) GTEST_SKIP() << why;
+  const Scene& s = *sponza;
   Pair p = renderPair(s, 96, 54, {"vpl.count=256", "rsm.resolution=256"}, false, ReferenceMode::Full, false,
                       "sponza_sun_full_96x54", 16);
   double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;

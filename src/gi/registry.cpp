@@ -3,6 +3,7 @@
 #include "gi/vpl/techniques.h"
 #include "gi/rsm/rsm_technique.h"
 #include "gi/splat/splat_technique.h"
+#include "gi/lpv/lpv_technique.h"
 
 namespace gi {
 
@@ -12,6 +13,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       igiTechniqueInfo(),
       rsmTechniqueInfo(),
       splatTechniqueInfo(),
+      lpvTechniqueInfo(),
   };
   return registry;
 }

@@ -1,0 +1,60 @@
+// Shared by the technique benchmarks: render frames of one technique and print the median device
+// milliseconds of each of its kernels (the profiler's names that start with the technique's name).
+#pragma once
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "render/renderer.h"
+
+namespace gi::timing {
+
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+struct FrameSettings {
+  int frames = 9, warmup = 2, width = 640, height = 360;
+};
+
+// Renders warm-up frames, then `frames` timed ones; prints the technique's kernels (not the shared
+// raster passes) and a total; returns every pass's median by name, plus "__total".
+inline std::map<std::string, double> timeTechnique(cl::Context& ctx, const Scene& scene, const FrameSettings& a,
+                                                   const std::string& technique, std::vector<std::string> sets,
+                                                   const std::string& title) {
+  RenderSettings rs;
+  rs.width = a.width;
+  rs.height = a.height;
+  rs.technique = technique;
+  rs.sets = sets;
+  Renderer r(ctx, scene, rs);
+  for (int i = 0; i < a.warmup; ++i) r.renderFrame();
+  std::map<std::string, std::vector<double>> per;
+  std::vector<std::string> order;
+  for (int f = 0; f < a.frames; ++f)
+    for (auto& [name, ms] : r.renderFrame()) {
+      if (!per.count(name)) order.push_back(name);
+      per[name].push_back(ms);
+    }
+  std::printf("\n%s  (%s", title.c_str(), technique.c_str());
+  for (auto& s : sets) std::printf(" %s", s.c_str());
+  std::printf(")\n");
+  std::map<std::string, double> out;
+  double total = 0;
+  for (auto& name : order) {
+    double m = median(per[name]);
+    out[name] = m;
+    if (name.rfind(technique, 0) == 0) {
+      std::printf("  %-34s %8.3f ms\n", name.c_str(), m);
+      total += m;
+    }
+  }
+  std::printf("  %-34s %8.3f ms\n", "technique total", total);
+  out["__total"] = total;
+  return out;
+}
+
+}  // namespace gi::timing

@@ -1,0 +1,142 @@
+// The light propagation volume on the device (see lpv_volume.h; kernels in kernels/gi/lpv/lpv.cl).
+#include "gi/lpv/lpv_volume.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gi {
+
+std::vector<LpvCascade> lpvCascadeLayout(const Bounds& bounds, const glm::vec3& camera, int resolution,
+                                         int cascades, float extent0) {
+  const float n = float(resolution);
+  if (cascades == 0) {
+    glm::vec3 e = bounds.extent();
+    float cell = std::max({e.x, e.y, e.z, 1e-6f}) / n;
+    return {LpvCascade{bounds.center() - 0.5f * n * cell, cell}};
+  }
+  std::vector<LpvCascade> layout;
+  for (int k = 0; k < cascades; ++k) {
+    float cell = extent0 * std::ldexp(1.0f, k) / n;
+    glm::vec3 snapped = glm::floor(camera / cell) * cell;
+    layout.push_back({snapped - 0.5f * n * cell, cell});
+  }
+  return layout;
+}
+
+float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveShadowMap>& rsms) {
+  double bound = 0.0;
+  for (const ReflectiveShadowMap& r : rsms) {
+    const GiLight& l = scene.lights[r.light];
+    double peak = std::max({l.intensity[0], l.intensity[1], l.intensity[2], 0.0f});
+    if (l.type == GI_LIGHT_DIRECTIONAL) {
+      double side = double(r.view.texel_world_size);
+      bound += peak * side * r.view.width * side * r.view.height;  // irradiance × the RSM's area
+    } else {
+      bound += peak * 4.0 * M_PI;  // intensity over the whole sphere
+    }
+  }
+  return float(std::ldexp(1.0, 48) / std::max(bound, 1e-20));
+}
+
+LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
+    : ctx_(ctx), n_(resolution), cascades_(cascadeCount) {
+  program_ = ctx.buildProgram("kernels/gi/lpv/lpv.cl", {{"LPV_N", std::to_string(n_)},
+                                                         {"LPV_CASCADES", std::to_string(cascades_)},
+                                                         {"LPV_RUN", std::to_string(kRunLength)}});
+  inject_ = program_.kernel("lpv_inject");
+  geometryRsm_ = program_.kernel("lpv_geometry_rsm");
+  geometryCamera_ = program_.kernel("lpv_geometry_camera");
+  resolveInjection_ = program_.kernel("lpv_resolve_injection");
+  resolveGeometry_ = program_.kernel("lpv_resolve_geometry");
+  propagate_ = program_.kernel("lpv_propagate");
+  lookup_ = program_.kernel("lpv_lookup");
+  size_t cells = cellsPerGrid() * cascades_, nodes = nodesPerGrid() * cascades_;
+  layout_ = cl::Buffer(ctx, size_t(cascades_) * 16, CL_MEM_READ_ONLY, "lpv cascade layout");
+  gridAcc_ = cl::Buffer(ctx, cells * 3 * 4 * 8, CL_MEM_READ_WRITE, "lpv injection sums");
+  geometryAcc_ = cl::Buffer(ctx, nodes * 2 * 4 * 8, CL_MEM_READ_WRITE, "lpv geometry sums");
+  for (cl::Buffer& g : grids_) g = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv grid");
+  accumulated_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv accumulated grid");
+  geometry_ = cl::Buffer(ctx, nodes * 16, CL_MEM_READ_WRITE, "lpv geometry volume");
+  ctx.fill(geometry_, 0.0f);
+  // Rows of cells as work-groups: many groups (PoCL spreads them over the cores), x-contiguous.
+  size_t row = 1;
+  for (size_t l : {32, 16, 8, 4, 2})
+    if (n_ % l == 0) {
+      row = l;
+      break;
+    }
+  propagateRange_ = cl::NDRange::d3(size_t(n_), size_t(n_), size_t(n_) * cascades_);
+  propagateRange_.local[0] = row;
+  propagateRange_.local[1] = propagateRange_.local[2] = 1;
+}
+
+uint64_t LpvVolume::bytes() const {
+  return layout_.bytes() + gridAcc_.bytes() + geometryAcc_.bytes() + grids_[0].bytes() + grids_[1].bytes() +
+         accumulated_.bytes() + geometry_.bytes();
+}
+
+void LpvVolume::begin(const std::vector<LpvCascade>& layout, float injectionFixedScale) {
+  if (int(layout.size()) != cascades_) throw Error("lpv: layout has the wrong number of cascades");
+  std::vector<glm::vec4> packed;
+  for (const LpvCascade& c : layout) packed.emplace_back(c.origin, c.cell);
+  ctx_.write(layout_, packed.data(), packed.size() * sizeof(glm::vec4));
+  injectionScale_ = injectionFixedScale;
+  ctx_.fill(gridAcc_, int64_t(0));
+  ctx_.fill(geometryAcc_, int64_t(0));
+  current_ = 0;
+}
+
+void LpvVolume::inject(const cl::Buffer& position, const cl::Buffer& normal, const cl::Buffer& flux, int res,
+                       int block, float bias) {
+  int merged = res / block;
+  inject_.args(position, normal, flux, res, block, bias, layout_, injectionScale_, gridAcc_);
+  size_t runs = size_t(merged + kRunLength - 1) / kRunLength;
+  ctx_.launch(inject_, cl::NDRange::d2(runs, size_t(merged)), "lpv: inject");
+}
+
+void LpvVolume::addGeometryRsm(const GiView& view, const cl::Buffer& position, const cl::Buffer& normal, int res) {
+  geometryRsm_.args(view, position, normal, res, layout_, kGeometryFixedScale, geometryAcc_);
+  size_t runs = size_t(res + kRunLength - 1) / kRunLength;
+  ctx_.launch(geometryRsm_, cl::NDRange::d2(runs, size_t(res)), "lpv: geometry (rsm)");
+}
+
+void LpvVolume::addGeometryCamera(const GBuffer& g) {
+  geometryCamera_.args(g.view, g.position, g.geoNormal, g.width, g.height, layout_, kGeometryFixedScale,
+                       geometryAcc_);
+  size_t runs = size_t(g.width + kRunLength - 1) / kRunLength;
+  ctx_.launch(geometryCamera_, cl::NDRange::d2(runs, size_t(g.height)), "lpv: geometry (camera)");
+}
+
+void LpvVolume::resolve(bool geometry) {
+  resolveInjection_.args(gridAcc_, 1.0f / injectionScale_, grids_[0], accumulated_);
+  ctx_.launch(resolveInjection_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: resolve");
+  current_ = 0;
+  if (!geometry) return;
+  resolveGeometry_.args(geometryAcc_, 1.0f / kGeometryFixedScale, geometry_);
+  ctx_.launch(resolveGeometry_, cl::NDRange::d2(nodesPerGrid(), size_t(cascades_)), "lpv: resolve");
+}
+
+void LpvVolume::setInjected(const std::vector<glm::vec4>& coefficients) {
+  size_t bytes = coefficients.size() * sizeof(glm::vec4);
+  if (bytes != grids_[0].bytes()) throw Error("lpv: injected grid of the wrong size");
+  ctx_.write(grids_[0], coefficients.data(), bytes);
+  ctx_.write(accumulated_, coefficients.data(), bytes);
+  current_ = 0;
+}
+
+void LpvVolume::propagate(int iterations, bool blocking) {
+  for (int i = 0; i < iterations; ++i) {
+    // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
+    propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, geometry_, int(blocking && i > 0));
+    ctx_.launch(propagate_, propagateRange_, "lpv: propagate");
+    current_ = 1 - current_;
+  }
+}
+
+void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out) {
+  lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
+               accumulated_, out);
+  ctx_.launch(lookup_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4), "lpv: lookup");
+}
+
+}  // namespace gi

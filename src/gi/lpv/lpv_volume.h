@@ -1,0 +1,80 @@
+// The light propagation volume on the device: cascaded SH grids, the geometry volume, and the
+// passes that fill, propagate and read them (kernels/gi/lpv/lpv.cl). The `lpv` technique
+// (lpv_technique.cpp) drives it once per frame; the tests drive the passes one by one.
+//
+// Units: the grid stores the SH coefficients (kernels/common/sh.h) of each cell's intensity
+// I(ω) in W/sr by direction of travel; the geometry volume stores blocking potential
+// (dimensionless, A/s² × cosine lobe). A grid with `cascades` levels is LPV_N³ cells each; level k
+// is the axis-aligned cube with corner origin[k] and cell edge cell[k] (LpvCascade).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cl/runtime.h"
+#include "raster/gbuffer.h"
+#include "scene/scene.h"
+
+namespace gi {
+
+struct LpvCascade {
+  glm::vec3 origin{0.0f};  // corner of cell (0, 0, 0), metres
+  float cell = 1.0f;       // cell edge s, metres
+};
+
+// cascades == 0: one grid, a cube over the scene bounds' longest edge, centred on the bounds.
+// cascades >= 1: that many grids of edge extent0·2^k centred on the camera, each snapped to its own
+// whole cells (the grid moves in steps of one cell, so the image does not swim).
+std::vector<LpvCascade> lpvCascadeLayout(const Bounds& bounds, const glm::vec3& camera, int resolution,
+                                         int cascades, float extent0);
+
+// Fixed-point scale for the injection sums (ALGORITHMS.md §7): 2^48 over an upper bound of the
+// flux all RSMs together can reflect (light power, albedo <= 1), so no cell sum can overflow.
+float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveShadowMap>& rsms);
+
+class LpvVolume {
+public:
+  static constexpr int kRunLength = 16;  // texels a work-item merges before its atomic adds
+  static constexpr float kGeometryFixedScale = 1099511627776.0f;  // 2^40
+
+  LpvVolume(cl::Context& ctx, int resolution, int cascadeCount);
+
+  int resolution() const { return n_; }
+  int cascadeCount() const { return cascades_; }
+  size_t cellsPerGrid() const { return size_t(n_) * n_ * n_; }
+  size_t nodesPerGrid() const { return size_t(n_ + 1) * (n_ + 1) * (n_ + 1); }
+  uint64_t bytes() const;
+
+  // Per frame, in this order.
+  void begin(const std::vector<LpvCascade>& layout, float injectionFixedScale);  // clears the sums
+  // RSM planes (float4 per texel, res×res) merged in block×block groups; VPLs shifted by
+  // bias × cell along their normal.
+  void inject(const cl::Buffer& position, const cl::Buffer& normal, const cl::Buffer& flux, int res, int block,
+              float bias);
+  void addGeometryRsm(const GiView& view, const cl::Buffer& position, const cl::Buffer& normal, int res);
+  void addGeometryCamera(const GBuffer& g);
+  void resolve(bool geometry);  // sums -> float grids (the geometry volume only when asked)
+  void propagate(int iterations, bool blocking);
+  void lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out);
+
+  // For tests: the grid the last step wrote (the injected grid before any step), the accumulated
+  // grid and the geometry volume, layouts as in lpv.cl.
+  const cl::Buffer& current() const { return grids_[current_]; }
+  cl::Buffer& accumulated() { return accumulated_; }
+  cl::Buffer& geometry() { return geometry_; }
+  // Replaces the injected grid (and the accumulated one) by `coefficients` (float4 [cascade][rgb][cell]).
+  void setInjected(const std::vector<glm::vec4>& coefficients);
+
+private:
+  cl::Context& ctx_;
+  int n_, cascades_;
+  float injectionScale_ = 1.0f;
+  cl::Program program_;
+  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, propagate_, lookup_;
+  cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_;
+  cl::NDRange propagateRange_;
+  int current_ = 0;
+};
+
+}  // namespace gi

@@ -1,0 +1,112 @@
+// Light propagation volume accuracy against the reference path tracer at 128×128 (issue 6), and
+// the thin-wall leak measurement. Bounds are stated here and in docs/techniques/lpv.md; where the
+// issue's target is not met the bound asserted is the measured value with a small margin, so a
+// change that makes things worse fails:
+//   - empty Cornell box lit by the downward punctual spot (as the vpl test): `lpv`, one grid of
+//     32³ over the box, 32 iterations, against the one-bounce-indirect diffuse reference (256 spp).
+//     Asserted: mean indirect radiance within 25 % of the reference (the issue's bound; measured
+//     +21.4 %). SSIM printed (0.31: LPV light stays near the floor — see the docs page).
+//   - full Cornell box (blocks), same spot, full image (direct + lpv) vs the full reference
+//     (256 spp): measured SSIM 0.422, asserted >= 0.38. Issue target 0.85: NOT met.
+//   - Sponza 96×54 with its sun, default 3 cascades of 32³, full image vs a 16-spp reference:
+//     measured SSIM 0.486, asserted >= 0.45 (issue target 0.85: not met, and a 16-spp reference
+//     is too noisy to judge it; docs/results/lpv.md has the converged comparison). Skipped
+//     without media.
+//   - thin wall (builtin:thin_wall, 2 cm wall, 6.25 cm cells): indirect light in the dark room B
+//     over that in the lit room A, without / with the geometry volume: measured 0.0270 / 0.0048
+//     (the reference has none); asserted: the geometry volume removes at least half of the leak.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "accuracy_support.h"
+#include "metrics/metrics.h"
+#include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "test_support.h"
+
+using namespace gi;
+
+namespace {
+
+using test::cornellWithSpot;
+
+const std::vector<std::string> kBoxSettings = {"lpv.cascades=0", "lpv.resolution=32"};
+
+double ssimOf(const test::AccuracyPair& p, float exposure) {
+  return metrics::ssim(displayTransform(p.reference, exposure), displayTransform(p.raster, exposure)).mean;
+}
+
+TEST(LpvAccuracy, EmptyCornellBoxIndirectMeanWithin25Percent) {
+  Scene s = cornellWithSpot(false);
+  test::AccuracyPair p =
+      test::renderAgainstReference(s, "lpv", 128, 128, kBoxSettings, true, ReferenceMode::OneBounce, true,
+                                   "cornell_empty_spot_one_bounce_diffuse_128", 256);
+  double mr = test::meanOf(p.raster), mp = test::meanOf(p.reference);
+  std::printf("empty Cornell box, one-bounce indirect, lpv 32^3 x 32 iterations: mean %.5f vs reference %.5f "
+              "(%+.1f %%, bound 25 %%), SSIM %.4f\n", mr, mp, 100.0 * (mr / mp - 1.0), ssimOf(p, s.exposure));
+  EXPECT_NEAR(mr / mp, 1.0, 0.25);
+}
+
+TEST(LpvAccuracy, FullCornellBoxFullImageSsim) {
+  Scene s = cornellWithSpot(true);
+  test::AccuracyPair p =
+      test::renderAgainstReference(s, "lpv", 128, 128, kBoxSettings, false, ReferenceMode::Full, false,
+                                   "cornell_spot_full_128", 256);
+  double ssim = ssimOf(p, s.exposure);
+  std::printf("Cornell box (blocks), spot, direct + lpv vs full reference: SSIM %.4f (bound 0.38; issue target 0.85 "
+              "not met), mean %.5f vs %.5f\n", ssim, test::meanOf(p.raster), test::meanOf(p.reference));
+  EXPECT_GE(ssim, 0.38);
+}
+
+TEST(LpvAccuracy, SponzaSmallFullImageSsim) {
+  std::string why;
+  std::optional<Scene> sponza = test::loadSponza(why);
+  if (!sponza) GTEST_SKIP() << why;
+  const Scene& s = *sponza;
+  test::AccuracyPair p = test::renderAgainstReference(s, "lpv", 96, 54, {"rsm.resolution=256"}, false,
+                                                      ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
+  double ssim = ssimOf(p, s.exposure);
+  std::printf("Sponza 96x54, sun, direct + lpv (3 cascades of 32^3) vs full reference (16 spp): SSIM %.4f "
+              "(bound 0.45; issue target 0.85 not met)\n", ssim);
+  EXPECT_GE(ssim, 0.45);
+}
+
+// Mean indirect radiance of the columns that see only room B (the image's left half; +x points
+// left) over that of the columns that see only room A (the right half).
+double leakRatio(const Image& indirect) {
+  double a = 0.0, b = 0.0;
+  int na = 0, nb = 0, margin = indirect.width / 32;
+  for (int y = 0; y < indirect.height; ++y)
+    for (int x = 0; x < indirect.width; ++x) {
+      const float* px = indirect.at(x, y);
+      double v = (px[0] + px[1] + px[2]) / 3.0;
+      if (x >= indirect.width / 2 + margin) a += v, ++na;
+      if (x < indirect.width / 2 - margin) b += v, ++nb;
+    }
+  return (b / nb) / (a / na);
+}
+
+TEST(LpvLeak, ThinWallWithAndWithoutGeometryVolume) {
+  Scene s = makeBuiltinScene("thin_wall");
+  double leak[2];
+  for (int occlusion = 0; occlusion < 2; ++occlusion) {
+    RenderSettings rs;
+    rs.width = 128;
+    rs.height = 64;
+    rs.technique = "lpv";
+    rs.sets = {"lpv.cascades=0", "lpv.resolution=32", std::string("lpv.occlusion=") + (occlusion ? "1" : "0")};
+    Renderer r(test::context(), s, rs);
+    r.renderFrame();
+    Image indirect = r.indirectRadiance(), direct = r.directRadiance();
+    // The direct light stays in room A (shadow maps), so all light in room B is leak.
+    EXPECT_LT(leakRatio(direct), 1e-6);
+    leak[occlusion] = leakRatio(indirect);
+  }
+  std::printf("thin wall (2 cm, cells 6.25 cm), lpv 32^3: room B / room A indirect = %.4f without the geometry "
+              "volume, %.4f with it (reference: 0)\n", leak[0], leak[1]);
+  EXPECT_GT(leak[0], 0.0);  // the leak is there to be measured, not hidden
+  EXPECT_LT(leak[1], 0.5 * leak[0]);
+}
+
+}  // namespace

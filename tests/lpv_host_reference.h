@@ -1,0 +1,108 @@
+// Host implementation of the light-propagation-volume formulas (ALGORITHMS.md §4), written from
+// the formulas, not from the kernels, for the LPV tests: injection, geometry surfels, one
+// propagation step, lookup. Layouts as in kernels/gi/lpv/lpv.cl. Float arithmetic; sums that the
+// kernels do in 64-bit fixed point are done in double here.
+#pragma once
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "kernels/common/sh.h"
+#include "gi/lpv/lpv_volume.h"
+
+namespace gi::lpvref {
+
+constexpr float kMainFace = 0.4006696846f, kSideFace = 0.4234413544f;
+constexpr float kPi = 3.14159265358979f;
+
+inline glm::vec4 basis(glm::vec3 d) { return {GI_SH_Y0, GI_SH_Y1 * d.y, GI_SH_Y1 * d.z, GI_SH_Y1 * d.x}; }
+inline glm::vec4 lobe(glm::vec3 n) { return {GI_SH_LOBE0, GI_SH_LOBE1 * n.y, GI_SH_LOBE1 * n.z, GI_SH_LOBE1 * n.x}; }
+
+struct Grid {
+  int n = 0, cascades = 1;
+  std::vector<glm::vec4> c;  // [cascade][rgb][cell]
+  Grid(int n_, int k) : n(n_), cascades(k), c(size_t(3) * k * n_ * n_ * n_, glm::vec4(0.0f)) {}
+  size_t cells() const { return size_t(n) * n * n; }
+  size_t index(int k, int ch, glm::ivec3 p) const { return (size_t(k) * 3 + ch) * cells() + (size_t(p.z) * n + p.y) * n + p.x; }
+  bool inside(glm::ivec3 p) const { return glm::all(glm::greaterThanEqual(p, glm::ivec3(0))) && glm::all(glm::lessThan(p, glm::ivec3(n))); }
+};
+
+// Geometry volume nodes on cell corners: (n + 1)³ per cascade.
+inline size_t nodeIndex(int n, int k, glm::ivec3 p) {
+  size_t m = size_t(n) + 1;
+  return size_t(k) * m * m * m + (size_t(p.z) * m + p.y) * m + p.x;
+}
+
+// The 5 faces a neighbour lights in the destination, for light travelling along axis d.
+struct Face {
+  glm::vec3 eval, emit;
+  float solidAngle;
+};
+inline std::array<Face, 5> facesFor(glm::vec3 d) {
+  std::array<Face, 5> f;
+  f[0] = {d, d, kMainFace};
+  int j = 1;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (d[axis] != 0.0f) continue;
+    for (float sign : {1.0f, -1.0f}) {
+      glm::vec3 t(0.0f);
+      t[axis] = sign;
+      f[j++] = {glm::normalize(2.0f * d + t), t, kSideFace};
+    }
+  }
+  return f;
+}
+
+inline std::array<glm::vec3, 6> axes() {
+  return {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, -1, 0), glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)};
+}
+
+// One gather step from `src`; `geometry` (per node, may be empty) blocks when `blocking`.
+inline Grid propagate(const Grid& src, const std::vector<glm::vec4>& geometry, bool blocking) {
+  Grid dst(src.n, src.cascades);
+  for (int k = 0; k < src.cascades; ++k)
+    for (int z = 0; z < src.n; ++z)
+      for (int y = 0; y < src.n; ++y)
+        for (int x = 0; x < src.n; ++x) {
+          glm::ivec3 c(x, y, z);
+          for (glm::vec3 d : axes()) {
+            glm::ivec3 nb = c - glm::ivec3(d);
+            if (!src.inside(nb)) continue;
+            glm::vec4 g(0.0f);
+            if (blocking) {
+              // Shared face between nb and c: average of its 4 corner nodes.
+              int a = d.x != 0 ? 0 : d.y != 0 ? 1 : 2;
+              glm::ivec3 corner = c;
+              if (d[a] < 0) corner[a] += 1;
+              for (int u = 0; u < 2; ++u)
+                for (int v = 0; v < 2; ++v) {
+                  glm::ivec3 q = corner;
+                  q[(a + 1) % 3] += u;
+                  q[(a + 2) % 3] += v;
+                  g += 0.25f * geometry[nodeIndex(src.n, k, q)];
+                }
+            }
+            for (const Face& f : facesFor(d)) {
+              float w = f.solidAngle / kPi;
+              if (blocking) w *= 1.0f - std::clamp(glm::dot(g, basis(-f.eval)), 0.0f, 1.0f);
+              for (int ch = 0; ch < 3; ++ch) {
+                float intensity = std::max(glm::dot(src.c[src.index(k, ch, nb)], basis(f.eval)), 0.0f);
+                dst.c[dst.index(k, ch, c)] += intensity * w * lobe(f.emit);
+              }
+            }
+          }
+        }
+  return dst;
+}
+
+// Total flux (W) of channel ch of cascade k: ∫ I dω = 4π·Y00·c0 per cell.
+inline double totalFlux(const Grid& g, int k, int ch) {
+  double s = 0.0;
+  for (size_t i = 0; i < g.cells(); ++i) s += g.c[(size_t(k) * 3 + ch) * g.cells() + i].x;
+  return s * 4.0 * M_PI * GI_SH_Y0;
+}
+
+}  // namespace gi::lpvref
