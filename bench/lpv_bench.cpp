@@ -6,23 +6,54 @@
 // <= 6 ms, lookup <= 2 ms, 3 cascades of 32³ all together <= 25 ms.
 //
 //   build/lpv_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 9] [--large]
-//   (--large adds 64³ cascades and a 128³ grid with 128 iterations)
+//                   [--falloff]
+//   (--large adds 64³ cascades and a 128³ grid with 128 iterations; --falloff only prints how
+//   far light travels: the on-axis irradiance above one cosine-lobe cell in an empty grid after
+//   `resolution` iterations, against the exact Φ/(π r²) of that emitter, at 32³, 64³ and 128³)
 #include <cstdio>
 #include <string>
 #include <vector>
 
 #include "cl/runtime.h"
 #include "gi/lpv/lpv_volume.h"
+#include "kernels/common/sh.h"
 #include "scene/cornell_box.h"
 #include "scene/scene_loader.h"
 #include "technique_timing.h"
 
 using namespace gi;
 
+namespace {
+
+// One upward cosine lobe of flux 1 in cell (n/2, 1, n/2) of an empty n³ grid with 1 m cells,
+// propagated n times without blocking; prints E(r) / (1/(π r²)) along the axis above it.
+void printFalloff(cl::Context& ctx, int n) {
+  LpvVolume v(ctx, n, 1);
+  v.begin({LpvCascade{glm::vec3(0.0f), 1.0f}}, 1.0f);
+  size_t cells = v.cellsPerGrid();
+  std::vector<glm::vec4> grid(cells * 3, glm::vec4(0.0f));
+  auto index = [&](int x, int y, int z) { return (size_t(z) * n + y) * n + x; };
+  const float kPi = 3.14159265f;
+  glm::vec4 lobe(GI_SH_LOBE0 / kPi, GI_SH_LOBE1 / kPi, 0.0f, 0.0f);  // along +y, Φ = 1
+  for (int ch = 0; ch < 3; ++ch) grid[ch * cells + index(n / 2, 1, n / 2)] = lobe;
+  v.setInjected(grid);
+  v.propagate(n, false);
+  std::vector<glm::vec4> acc = v.readAccumulated();
+  std::printf("  %d^3, %d iterations: E / exact at r =", n, n);
+  for (int r = 2; r + 1 < n; r *= 2) {
+    glm::vec4 c = acc[index(n / 2, 1 + r, n / 2)];
+    double e = GI_SH_COSCONV0 * GI_SH_Y0 * c.x + GI_SH_COSCONV1 * GI_SH_Y1 * c.y;  // receiver facing down
+    std::printf("  %d: %.3g", r, e / (1.0 / (kPi * r * r)));
+  }
+  std::printf(" cells\n");
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   timing::FrameSettings a;
   std::string sceneName = "scenes/sponza.json";
-  bool large = false;
+  bool large = false, falloff = false;
   for (int i = 1; i < argc; ++i) {
     std::string k = argv[i];
     auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
@@ -31,13 +62,19 @@ int main(int argc, char** argv) {
     else if (k == "--height") a.height = std::stoi(next());
     else if (k == "--frames") a.frames = std::stoi(next());
     else if (k == "--large") large = true;
+    else if (k == "--falloff") falloff = true;
     else {
-      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large]\n");
+      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large] [--falloff]\n");
       return 2;
     }
   }
   try {
     cl::Context ctx(cl::selectDevice(""));
+    if (falloff) {
+      std::printf("lpv falloff: on-axis irradiance above one cosine-lobe cell, relative to the exact 1/(pi r^2)\n");
+      for (int n : {32, 64, 128}) printFalloff(ctx, n);
+      return 0;
+    }
     Scene scene;
     try {
       scene = loadScene(sceneName, "");

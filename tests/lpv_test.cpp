@@ -123,7 +123,7 @@ TEST(LpvKernels, InjectionMatchesHost) {
   cl::Buffer pos = ctx.upload(p.position, "pos"), nrm = ctx.upload(p.normal, "nrm"), flux = ctx.upload(p.flux, "flux");
   v.inject(pos, nrm, flux, res, block, bias);
   v.resolve(false);
-  std::vector<glm::vec4> got = ctx.download<glm::vec4>(v.current());
+  std::vector<glm::vec4> got = v.readCurrent();
 
   lpvref::Grid want(kN, 2);
   std::vector<glm::dvec4> sums(want.c.size(), glm::dvec4(0.0));
@@ -185,7 +185,7 @@ TEST(LpvKernels, GeometryVolumeMatchesHost) {
   v.addGeometryRsm(rsmView, pos, nrm, rsmRes);
   v.addGeometryCamera(g);
   v.resolve(true);
-  std::vector<glm::vec4> got = ctx.download<glm::vec4>(v.geometry());
+  std::vector<glm::vec4> got = v.readGeometry();
 
   size_t nodes = v.nodesPerGrid();
   std::vector<glm::dvec4> sums(2 * 2 * nodes, glm::dvec4(0.0));  // [cascade][source][node]
@@ -239,7 +239,7 @@ TEST(LpvKernels, PropagationMatchesHost) {
   LpvVolume v(ctx, kN, 2);
   v.begin(kTwoCascades, 1.0f);
   v.resolve(false);
-  ctx.write(v.geometry(), geometry.data(), geometry.size() * 16);
+  v.setGeometry(geometry);
   v.setInjected(g.c);
   const int steps = 3;
   v.propagate(steps, true);
@@ -248,8 +248,8 @@ TEST(LpvKernels, PropagationMatchesHost) {
     cur = lpvref::propagate(cur, geometry, i > 0);
     for (size_t j = 0; j < acc.c.size(); ++j) acc.c[j] += cur.c[j];
   }
-  double errStep = relativeMaxError(ctx.download<glm::vec4>(v.current()), cur.c);
-  double errAcc = relativeMaxError(ctx.download<glm::vec4>(v.accumulated()), acc.c);
+  double errStep = relativeMaxError(v.readCurrent(), cur.c);
+  double errAcc = relativeMaxError(v.readAccumulated(), acc.c);
   std::printf("propagation, 3 steps with blocking: max error %.2e (last step), %.2e (accumulated)\n", errStep, errAcc);
   EXPECT_LT(errStep, 1e-5);
   EXPECT_LT(errAcc, 1e-5);
@@ -362,7 +362,7 @@ TEST(LpvEnergy, FluxKeptPerStepMatchesFaceSolidAngles) {
     for (int step = 1; step <= 7; ++step) {  // the light reaches the border at step 8
       v.propagate(1, false);
       lpvref::Grid dev(n, 1);
-      dev.c = ctx.download<glm::vec4>(v.current());
+      dev.c = v.readCurrent();
       host = lpvref::propagate(host, {}, false);
       double flux = lpvref::totalFlux(dev, 0, 0);
       if (step == 1) EXPECT_NEAR(flux, analytic, 1e-5) << s.name;
@@ -395,10 +395,10 @@ TEST(LpvBlocking, WallCutsTransportedFluxByExpectedFactor) {
     LpvVolume v(ctx, n, 1);
     v.begin({LpvCascade{glm::vec3(0.0f), 1.0f}}, 1.0f);
     v.resolve(false);
-    ctx.write(v.geometry(), geometry.data(), geometry.size() * 16);
+    v.setGeometry(geometry);
     v.setInjected(g.c);
     v.propagate(2, true);  // step 1 fills x = 3 (no blocking), step 2 crosses the plane x = 4
-    std::vector<glm::vec4> c = ctx.download<glm::vec4>(v.current());
+    std::vector<glm::vec4> c = v.readCurrent();
     double s = 0.0;
     for (int z = 0; z < n; ++z)
       for (int y = 0; y < n; ++y) s += c[g.index(0, 0, {4, y, z})].x;

@@ -24,16 +24,21 @@
 // that fall into the same cell (integer sums again, so the merging does not change the result).
 //
 // Layouts (N = LPV_N, cells (z·N + y)·N + x, nodes the same with N + 1):
-//   grid     float4 [cascade][channel r,g,b][cell]: SH coefficients of intensity (sh.h order)
+//   grid     float planes [cascade][channel r,g,b][coefficient][cell]: SH coefficients of intensity
+//            (sh.h order), after LPV_PAD floats of padding (the buffer ends with LPV_PAD more), so
+//            the propagation's row loads one cell left or right of a row stay inside the buffer;
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
-//   geometry float4 [cascade][node]; geometryAcc long [cascade][source rsm, camera][node][4]
+//   geometry float planes [cascade][coefficient][node]; geometryAcc long [cascade][source rsm, camera][node][4]
 //   cascades float4 [cascade]: (origin xyz of cell (0,0,0)'s corner, cell edge s), metres
+// The propagation works on LPV_LANES cells of a row per work-item (16 on CPU devices: float16
+// lanes; 1 on GPUs), the lane-wise convention of common/vector_width.h.
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #include "common/math.h"
 #include "common/sh.h"
 #include "common/shared_types.h"
 
 #define LPV_CELLS (LPV_N * LPV_N * LPV_N)
+#define LPV_PLANE(k, ch, coef) ((size_t)(((k) * 3 + (ch)) * 4 + (coef)) * LPV_CELLS)
 #define LPV_M (LPV_N + 1)
 #define LPV_NODES (LPV_M * LPV_M * LPV_M)
 
@@ -204,97 +209,158 @@ kernel void lpv_geometry_camera(GiView view, global const float4* position, glob
 // ---- resolve ----------------------------------------------------------------------------------
 
 // One work-item per (cell, channel, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
-kernel void lpv_resolve_injection(global const long* gridAcc, float invFixedScale, global float4* grid,
-                                  global float4* accumulated) {
-  size_t i = (get_global_id(2) * 3 + get_global_id(1)) * LPV_CELLS + get_global_id(0);
-  float4 v = convert_float4(vload4(i, gridAcc)) * invFixedScale;
-  grid[i] = v;
-  accumulated[i] = v;
+kernel void lpv_resolve_injection(global const long* gridAcc, float invFixedScale, global float* grid,
+                                  global float* accumulated) {
+  size_t cell = get_global_id(0), ch = get_global_id(1), k = get_global_id(2);
+  float4 v = convert_float4(vload4((k * 3 + ch) * LPV_CELLS + cell, gridAcc)) * invFixedScale;
+  grid += LPV_PAD;
+  accumulated += LPV_PAD;
+  for (int coef = 0; coef < 4; ++coef) {
+    float c = coef == 0 ? v.x : coef == 1 ? v.y : coef == 2 ? v.z : v.w;
+    grid[LPV_PLANE(k, ch, coef) + cell] = c;
+    accumulated[LPV_PLANE(k, ch, coef) + cell] = c;
+  }
 }
 
 // One work-item per (node, cascade): global (LPV_NODES, LPV_CASCADES).
-kernel void lpv_resolve_geometry(global const long* geometryAcc, float invFixedScale, global float4* geometry) {
+kernel void lpv_resolve_geometry(global const long* geometryAcc, float invFixedScale, global float* geometry) {
   size_t node = get_global_id(0), k = get_global_id(1);
   long4 fromRsm = vload4((k * 2 + 0) * LPV_NODES + node, geometryAcc);
   long4 fromCamera = vload4((k * 2 + 1) * LPV_NODES + node, geometryAcc);
-  geometry[k * LPV_NODES + node] = convert_float4(fromRsm.x >= fromCamera.x ? fromRsm : fromCamera) * invFixedScale;
+  float4 g = convert_float4(fromRsm.x >= fromCamera.x ? fromRsm : fromCamera) * invFixedScale;
+  global float* planes = geometry + k * 4 * LPV_NODES + node;
+  planes[0] = g.x;
+  planes[LPV_NODES] = g.y;
+  planes[2 * LPV_NODES] = g.z;
+  planes[3 * LPV_NODES] = g.w;
 }
 
 // ---- propagation ------------------------------------------------------------------------------
 
-inline float3 axis_direction(int i) {
-  int a = i >> 1;
-  float s = (i & 1) ? -1.0f : 1.0f;
-  return (float3)(a == 0 ? s : 0.0f, a == 1 ? s : 0.0f, a == 2 ? s : 0.0f);
+#if LPV_LANES == 16
+typedef float16 floatL;
+typedef int16 intL;
+#define vloadL vload16
+#define vstoreL vstore16
+#define LPV_LANE_IDS (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+#elif LPV_LANES == 8
+typedef float8 floatL;
+typedef int8 intL;
+#define vloadL vload8
+#define vstoreL vstore8
+#define LPV_LANE_IDS (int8)(0, 1, 2, 3, 4, 5, 6, 7)
+#elif LPV_LANES == 4
+typedef float4 floatL;
+typedef int4 intL;
+#define vloadL vload4
+#define vstoreL vstore4
+#define LPV_LANE_IDS (int4)(0, 1, 2, 3)
+#else
+typedef float floatL;
+typedef int intL;
+#define vloadL(o, p) ((p)[o])
+#define vstoreL(v, o, p) ((p)[o] = (v))
+#define LPV_LANE_IDS 0
+#endif
+
+// Index of axis a's linear SH coefficient in the (Y00, y, z, x) order.
+#define LPV_COEF(a) ((a) == 0 ? 3 : (a))
+
+// Adds one face's transport to out[12] (r, g, b × 4 coefficients). The evaluation direction is
+// scale·(sa·axis_a + sb·axis_b) (b < 0: none), the re-emission lobe points along se·axis_e. The
+// arguments are constants after inlining, so only the non-zero terms are computed.
+inline void lpv_face(const floatL* in, const floatL* g, int blocking, int a, float sa, int b, float sb, float scale,
+                     int e, float se, float solidAngle, floatL* out) {
+  floatL w = (floatL)(solidAngle * GI_INV_PI);
+  if (blocking) {
+    floatL along = sa * g[LPV_COEF(a)];
+    if (b >= 0) along += sb * g[LPV_COEF(b)];
+    floatL potential = GI_SH_Y0 * g[0] - (GI_SH_Y1 * scale) * along;  // GV · Y(−ω)
+    w *= 1.0f - clamp(potential, 0.0f, 1.0f);
+  }
+  for (int ch = 0; ch < 3; ++ch) {
+    const floatL* c = in + 4 * ch;
+    floatL along = sa * c[LPV_COEF(a)];
+    if (b >= 0) along += sb * c[LPV_COEF(b)];
+    floatL flux = fmax(GI_SH_Y0 * c[0] + (GI_SH_Y1 * scale) * along, 0.0f) * w;  // ΔΩ/π · max(0, I(ω))
+    out[4 * ch] += GI_SH_LOBE0 * flux;
+    out[4 * ch + LPV_COEF(e)] += (GI_SH_LOBE1 * se) * flux;
+  }
 }
 
-// One gather step. Work-item = destination cell (global (N, N, N·cascades)). Light travels from
-// the neighbour at cell − d in direction d (6 axes). Per neighbour, 5 faces of the destination:
-// the main face opposite the shared one (evaluated along d, solid angle 0.4007 sr, re-emitted
-// along d) and the 4 side faces (evaluated along normalize(2d + t) from the neighbour's centre to
-// the side face's centre, 0.4234 sr, re-emitted along t). Flux through a face = ΔΩ/π·max(0, I(ω))
-// × (1 − blocking), re-emitted as a clamped cosine lobe. Blocking is the geometry volume at the
-// shared face (the mean of its 4 corner nodes: all light into the destination enters there)
-// evaluated towards −ω; `blocking` = 0 skips it (first iteration, or occlusion off).
-kernel void lpv_propagate(global const float4* src, global float4* dst, global float4* accumulated,
-                          global const float4* geometry, int blocking) {
-  int3 c = (int3)(get_global_id(0), get_global_id(1), get_global_id(2) % LPV_N);
-  int k = get_global_id(2) / LPV_N;
-  global const float4* srcK = src + (size_t)k * 3 * LPV_CELLS;
-  global const float4* geometryK = geometry + (size_t)k * LPV_NODES;
-  float4 outR = (float4)(0.0f), outG = (float4)(0.0f), outB = (float4)(0.0f);
-  // Unrolled: the 30 face directions and lobes become constants, and PoCL vectorises the
-  // loop-free body across work-items (PERFORMANCE_FACTS.md points 1 and 7).
-#pragma unroll
-  for (int i = 0; i < 6; ++i) {
-    float3 d = axis_direction(i);
-    int3 nb = c - convert_int3(d);
-    if (any(nb < 0) || any(nb >= LPV_N)) continue;
-    int nbCell = cell_index(nb);
-    float4 inR = srcK[nbCell], inG = srcK[LPV_CELLS + nbCell], inB = srcK[2 * LPV_CELLS + nbCell];
-    float4 faceGeometry = (float4)(0.0f);
-    if (blocking) {
-      // Shared face: the plane between nb and c; its 4 corner nodes.
-      int a = i >> 1;
-      int3 base = c + (int3)(a == 0 && d.x < 0.0f, a == 1 && d.y < 0.0f, a == 2 && d.z < 0.0f);
-      int3 u = (int3)(a != 0, a == 0, 0), v = (int3)(0, a == 2, a != 2);
-      faceGeometry = 0.25f * (geometryK[node_index(base)] + geometryK[node_index(base + u)] +
-                              geometryK[node_index(base + v)] + geometryK[node_index(base + u + v)]);
-    }
-#pragma unroll
-    for (int face = 0; face < 5; ++face) {
-      float3 eval = d, emit = d;
-      float weight = LPV_MAIN_FACE_SOLID_ANGLE * GI_INV_PI;
-      if (face > 0) {
-        // The 4 axes perpendicular to d: skip d's own axis among the 6 directions.
-        int j = face - 1;
-        int sideAxis = ((i >> 1) + 1 + (j >> 1)) % 3;
-        emit = axis_direction(sideAxis * 2 + (j & 1));
-        eval = normalize(2.0f * d + emit);
-        weight = LPV_SIDE_FACE_SOLID_ANGLE * GI_INV_PI;
-      }
-      float4 y = sh_basis(eval);
-      if (blocking) weight *= 1.0f - clamp(dot(faceGeometry, sh_basis(-eval)), 0.0f, 1.0f);
-      float4 lobe = sh_cosine_lobe(emit) * weight;
-      outR += fmax(dot(inR, y), 0.0f) * lobe;
-      outG += fmax(dot(inG, y), 0.0f) * lobe;
-      outB += fmax(dot(inB, y), 0.0f) * lobe;
+// Gathers from the neighbour at −s along axis a (light travelling along s·axis_a into the cells
+// (x0 .. x0 + LPV_LANES − 1, y, z)): 1 main face and the 4 side faces.
+inline void lpv_gather(int a, float s, global const float* src, global const float* geometry, int x0, int y, int z,
+                       int blocking, floatL* out) {
+  int3 c = (int3)(x0, y, z);
+  int coord = a == 1 ? y : z;
+  if (a != 0 && (coord - (int)s < 0 || coord - (int)s >= LPV_N)) return;  // whole row outside
+  int stride = a == 0 ? 1 : a == 1 ? LPV_N : LPV_N * LPV_N;
+  int cell = (z * LPV_N + y) * LPV_N + x0 - (int)s * stride;  // may be −1 or LPV_CELLS: padding
+  floatL in[12];
+  for (int p = 0; p < 12; ++p) in[p] = vloadL(0, src + (size_t)p * LPV_CELLS + cell);
+  if (a == 0) {
+    intL x = x0 + LPV_LANE_IDS - (int)s;
+    intL inside = x >= 0 && x < LPV_N;
+    for (int p = 0; p < 12; ++p) in[p] = select((floatL)(0.0f), in[p], inside);
+  }
+  floatL g[4];
+  if (blocking) {
+    // The shared face's 4 corner nodes: on the plane between neighbour and cell along a.
+    int3 base = c + (int3)(a == 0 && s < 0.0f, a == 1 && s < 0.0f, a == 2 && s < 0.0f);
+    size_t n0 = (size_t)(base.z * LPV_M + base.y) * LPV_M + base.x;
+    size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;
+    for (int q = 0; q < 4; ++q) {
+      global const float* plane = geometry + (size_t)q * LPV_NODES + n0;
+      g[q] = 0.25f * (vloadL(0, plane) + vloadL(0, plane + u) + vloadL(0, plane + v) + vloadL(0, plane + u + v));
     }
   }
-  size_t o = (size_t)k * 3 * LPV_CELLS + cell_index(c);
-  dst[o] = outR;
-  dst[o + LPV_CELLS] = outG;
-  dst[o + 2 * LPV_CELLS] = outB;
-  accumulated[o] += outR;
-  accumulated[o + LPV_CELLS] += outG;
-  accumulated[o + 2 * LPV_CELLS] += outB;
+  lpv_face(in, g, blocking, a, s, -1, 0.0f, 1.0f, a, s, LPV_MAIN_FACE_SOLID_ANGLE, out);
+  const float sideScale = 0.4472135955f;  // 1/√5: ω = normalize(2·d ± t)
+  int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+  lpv_face(in, g, blocking, a, 2.0f * s, b1, 1.0f, sideScale, b1, 1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
+  lpv_face(in, g, blocking, a, 2.0f * s, b1, -1.0f, sideScale, b1, -1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
+  lpv_face(in, g, blocking, a, 2.0f * s, b2, 1.0f, sideScale, b2, 1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
+  lpv_face(in, g, blocking, a, 2.0f * s, b2, -1.0f, sideScale, b2, -1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
+}
+
+// One gather step. Work-item = LPV_LANES destination cells of a row (global (N / LPV_LANES, N,
+// N·cascades)). Light travels from the neighbour at cell − d in direction d (6 axes). Per
+// neighbour, 5 faces of the destination: the main face opposite the shared one (evaluated along
+// d, solid angle 0.4007 sr seen from the neighbour's centre, re-emitted along d) and the 4 side
+// faces (evaluated along normalize(2d + t), from the neighbour's centre to the side face's
+// centre, 0.4234 sr, re-emitted along t). Flux through a face = ΔΩ/π·max(0, I(ω)) × (1 − blocking),
+// re-emitted as a clamped cosine lobe. Blocking is the geometry volume at the shared face (the
+// mean of its 4 corner nodes: all light into the destination enters there) evaluated towards −ω;
+// `blocking` = 0 skips it (first iteration, or occlusion off).
+kernel void lpv_propagate(global const float* src, global float* dst, global float* accumulated,
+                          global const float* geometry, int blocking) {
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1);
+  int z = get_global_id(2) % LPV_N, k = get_global_id(2) / LPV_N;
+  size_t base = LPV_PAD + LPV_PLANE(k, 0, 0);
+  src += base;
+  geometry += (size_t)k * 4 * LPV_NODES;
+  floatL out[12];
+  for (int p = 0; p < 12; ++p) out[p] = (floatL)(0.0f);
+  lpv_gather(0, 1.0f, src, geometry, x0, y, z, blocking, out);
+  lpv_gather(0, -1.0f, src, geometry, x0, y, z, blocking, out);
+  lpv_gather(1, 1.0f, src, geometry, x0, y, z, blocking, out);
+  lpv_gather(1, -1.0f, src, geometry, x0, y, z, blocking, out);
+  lpv_gather(2, 1.0f, src, geometry, x0, y, z, blocking, out);
+  lpv_gather(2, -1.0f, src, geometry, x0, y, z, blocking, out);
+  size_t cell = (size_t)(z * LPV_N + y) * LPV_N + x0;
+  for (int p = 0; p < 12; ++p) {
+    size_t o = base + (size_t)p * LPV_CELLS + cell;
+    vstoreL(out[p], 0, dst + o);
+    vstoreL(vloadL(0, accumulated + o) + out[p], 0, accumulated + o);
+  }
 }
 
 // ---- lookup -----------------------------------------------------------------------------------
 
 // Irradiance (W/m² per channel) at p with geometric normal ng and shading normal n from cascade k:
 // trilinear over cell centres at p + ½ cell along ng (clamped at the grid's border cells).
-inline float3 cascade_irradiance(global const float4* accumulated, constant float4* cascades, int k, float3 p,
+inline float3 cascade_irradiance(global const float* accumulated, constant float4* cascades, int k, float3 p,
                                  float3 ng, float3 n) {
   float4 cascade = cascades[k];
   float s = cascade.w;
@@ -302,16 +368,16 @@ inline float3 cascade_irradiance(global const float4* accumulated, constant floa
   u = clamp(u, 0.0f, (float)(LPV_N - 1));
   int3 c0 = min(convert_int3_rtn(u), LPV_N - 2);
   float3 f = u - convert_float3(c0);
-  global const float4* g = accumulated + (size_t)k * 3 * LPV_CELLS;
+  global const float* g = accumulated + LPV_PAD + LPV_PLANE(k, 0, 0);
   float4 r = (float4)(0.0f), gr = (float4)(0.0f), b = (float4)(0.0f);
 #pragma unroll
   for (int corner = 0; corner < 8; ++corner) {
     int3 o = (int3)(corner & 1, (corner >> 1) & 1, corner >> 2);
     float w = (o.x ? f.x : 1.0f - f.x) * (o.y ? f.y : 1.0f - f.y) * (o.z ? f.z : 1.0f - f.z);
-    int cell = cell_index(c0 + o);
-    r += w * g[cell];
-    gr += w * g[LPV_CELLS + cell];
-    b += w * g[2 * LPV_CELLS + cell];
+    global const float* p = g + cell_index(c0 + o);
+    r += w * (float4)(p[0], p[LPV_CELLS], p[2 * LPV_CELLS], p[3 * LPV_CELLS]);
+    gr += w * (float4)(p[4 * LPV_CELLS], p[5 * LPV_CELLS], p[6 * LPV_CELLS], p[7 * LPV_CELLS]);
+    b += w * (float4)(p[8 * LPV_CELLS], p[9 * LPV_CELLS], p[10 * LPV_CELLS], p[11 * LPV_CELLS]);
   }
   // Radiance = intensity / s²; light arriving at the surface travels along −n.
   float3 m = -n;
@@ -332,7 +398,7 @@ inline float cascade_blend(float4 cascade, float3 p) {
 // One work-item per pixel. `blendCascades` = 0 for a single grid fitted to the scene.
 kernel void lpv_lookup(int width, int height, global const float4* position, global const float4* geoNormal,
                        global const float4* normal, global const float4* albedo, constant float4* cascades,
-                       int blendCascades, global const float4* accumulated, global float4* out) {
+                       int blendCascades, global const float* accumulated, global float4* out) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= width || y >= height) return;
   size_t i = (size_t)y * width + x;

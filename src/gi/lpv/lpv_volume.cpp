@@ -38,11 +38,21 @@ float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveSha
   return float(std::ldexp(1.0, 48) / std::max(bound, 1e-20));
 }
 
+// Cells of a row per propagation work-item: the device's vector width (16 on CPUs, 1 on GPUs),
+// reduced to a width the row length is a multiple of.
+int propagationLanes(int vectorWidth, int n) {
+  for (int lanes : {16, 8, 4})
+    if (lanes <= vectorWidth && n % lanes == 0) return lanes;
+  return 1;
+}
+
 LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
-    : ctx_(ctx), n_(resolution), cascades_(cascadeCount) {
+    : ctx_(ctx), n_(resolution), cascades_(cascadeCount), lanes_(propagationLanes(ctx.vectorWidth(), resolution)) {
   program_ = ctx.buildProgram("kernels/gi/lpv/lpv.cl", {{"LPV_N", std::to_string(n_)},
                                                          {"LPV_CASCADES", std::to_string(cascades_)},
-                                                         {"LPV_RUN", std::to_string(kRunLength)}});
+                                                         {"LPV_RUN", std::to_string(kRunLength)},
+                                                         {"LPV_LANES", std::to_string(lanes_)},
+                                                         {"LPV_PAD", std::to_string(kPad)}});
   inject_ = program_.kernel("lpv_inject");
   geometryRsm_ = program_.kernel("lpv_geometry_rsm");
   geometryCamera_ = program_.kernel("lpv_geometry_camera");
@@ -54,19 +64,18 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
   layout_ = cl::Buffer(ctx, size_t(cascades_) * 16, CL_MEM_READ_ONLY, "lpv cascade layout");
   gridAcc_ = cl::Buffer(ctx, cells * 3 * 4 * 8, CL_MEM_READ_WRITE, "lpv injection sums");
   geometryAcc_ = cl::Buffer(ctx, nodes * 2 * 4 * 8, CL_MEM_READ_WRITE, "lpv geometry sums");
-  for (cl::Buffer& g : grids_) g = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv grid");
-  accumulated_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv accumulated grid");
+  size_t gridBytes = (cells * 12 + 2 * kPad) * sizeof(float);
+  for (cl::Buffer& g : grids_) {
+    g = cl::Buffer(ctx, gridBytes, CL_MEM_READ_WRITE, "lpv grid");
+    ctx.fill(g, 0.0f);  // the padding stays 0
+  }
+  accumulated_ = cl::Buffer(ctx, gridBytes, CL_MEM_READ_WRITE, "lpv accumulated grid");
+  ctx.fill(accumulated_, 0.0f);
   geometry_ = cl::Buffer(ctx, nodes * 16, CL_MEM_READ_WRITE, "lpv geometry volume");
   ctx.fill(geometry_, 0.0f);
-  // Rows of cells as work-groups: many groups (PoCL spreads them over the cores), x-contiguous.
-  size_t row = 1;
-  for (size_t l : {32, 16, 8, 4, 2})
-    if (n_ % l == 0) {
-      row = l;
-      break;
-    }
-  propagateRange_ = cl::NDRange::d3(size_t(n_), size_t(n_), size_t(n_) * cascades_);
-  propagateRange_.local[0] = row;
+  // One row of cells per work-group: many groups, which PoCL spreads over the cores.
+  propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * cascades_);
+  propagateRange_.local[0] = size_t(n_ / lanes_);
   propagateRange_.local[1] = propagateRange_.local[2] = 1;
 }
 
@@ -117,11 +126,45 @@ void LpvVolume::resolve(bool geometry) {
 }
 
 void LpvVolume::setInjected(const std::vector<glm::vec4>& coefficients) {
-  size_t bytes = coefficients.size() * sizeof(glm::vec4);
-  if (bytes != grids_[0].bytes()) throw Error("lpv: injected grid of the wrong size");
-  ctx_.write(grids_[0], coefficients.data(), bytes);
-  ctx_.write(accumulated_, coefficients.data(), bytes);
+  size_t cells = cellsPerGrid();
+  if (coefficients.size() != cells * 3 * cascades_) throw Error("lpv: injected grid of the wrong size");
+  std::vector<float> planes(cells * 12 * cascades_ + 2 * kPad, 0.0f);
+  for (size_t i = 0; i < coefficients.size(); ++i) {  // i = (k·3 + ch)·cells + cell
+    size_t kch = i / cells, cell = i % cells;
+    for (int c = 0; c < 4; ++c) planes[kPad + (kch * 4 + c) * cells + cell] = coefficients[i][c];
+  }
+  ctx_.write(grids_[0], planes.data(), planes.size() * sizeof(float));
+  ctx_.write(accumulated_, planes.data(), planes.size() * sizeof(float));
   current_ = 0;
+}
+
+std::vector<glm::vec4> LpvVolume::readGrid(const cl::Buffer& b) {
+  std::vector<float> planes = ctx_.download<float>(b);
+  size_t cells = cellsPerGrid();
+  std::vector<glm::vec4> out(cells * 3 * cascades_);
+  for (size_t i = 0; i < out.size(); ++i) {
+    size_t kch = i / cells, cell = i % cells;
+    for (int c = 0; c < 4; ++c) out[i][c] = planes[kPad + (kch * 4 + c) * cells + cell];
+  }
+  return out;
+}
+
+std::vector<glm::vec4> LpvVolume::readGeometry() {
+  std::vector<float> planes = ctx_.download<float>(geometry_);
+  size_t nodes = nodesPerGrid();
+  std::vector<glm::vec4> out(nodes * cascades_);
+  for (size_t i = 0; i < out.size(); ++i)
+    for (int c = 0; c < 4; ++c) out[i][c] = planes[((i / nodes) * 4 + c) * nodes + i % nodes];
+  return out;
+}
+
+void LpvVolume::setGeometry(const std::vector<glm::vec4>& nodeValues) {
+  size_t nodes = nodesPerGrid();
+  if (nodeValues.size() != nodes * cascades_) throw Error("lpv: geometry volume of the wrong size");
+  std::vector<float> planes(nodes * 4 * cascades_);
+  for (size_t i = 0; i < nodeValues.size(); ++i)
+    for (int c = 0; c < 4; ++c) planes[((i / nodes) * 4 + c) * nodes + i % nodes] = nodeValues[i][c];
+  ctx_.write(geometry_, planes.data(), planes.size() * sizeof(float));
 }
 
 void LpvVolume::propagate(int iterations, bool blocking) {

@@ -36,6 +36,7 @@ float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveSha
 class LpvVolume {
 public:
   static constexpr int kRunLength = 16;  // texels a work-item merges before its atomic adds
+  static constexpr int kPad = 16;        // floats before and after the grid planes (lpv.cl)
   static constexpr float kGeometryFixedScale = 1099511627776.0f;  // 2^40
 
   LpvVolume(cl::Context& ctx, int resolution, int cascadeCount);
@@ -58,17 +59,21 @@ public:
   void propagate(int iterations, bool blocking);
   void lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out);
 
-  // For tests: the grid the last step wrote (the injected grid before any step), the accumulated
-  // grid and the geometry volume, layouts as in lpv.cl.
-  const cl::Buffer& current() const { return grids_[current_]; }
-  cl::Buffer& accumulated() { return accumulated_; }
-  cl::Buffer& geometry() { return geometry_; }
-  // Replaces the injected grid (and the accumulated one) by `coefficients` (float4 [cascade][rgb][cell]).
+  // For tests, coefficients as float4 [cascade][rgb][cell] (the device keeps planes, lpv.cl):
+  // the grid the last step wrote (the injected grid before any step), the accumulated grid.
+  std::vector<glm::vec4> readCurrent() { return readGrid(grids_[current_]); }
+  std::vector<glm::vec4> readAccumulated() { return readGrid(accumulated_); }
+  // Replaces the injected grid (and the accumulated one).
   void setInjected(const std::vector<glm::vec4>& coefficients);
+  // The geometry volume as float4 [cascade][node], read or replaced.
+  std::vector<glm::vec4> readGeometry();
+  void setGeometry(const std::vector<glm::vec4>& nodes);
 
 private:
+  std::vector<glm::vec4> readGrid(const cl::Buffer& b);
+
   cl::Context& ctx_;
-  int n_, cascades_;
+  int n_, cascades_, lanes_;
   float injectionScale_ = 1.0f;
   cl::Program program_;
   cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, propagate_, lookup_;
