@@ -4,6 +4,7 @@
 #include "gi/rsm/rsm_technique.h"
 #include "gi/splat/splat_technique.h"
 #include "gi/lpv/lpv_technique.h"
+#include "gi/vct/vct_technique.h"
 
 namespace gi {
 
@@ -14,6 +15,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       rsmTechniqueInfo(),
       splatTechniqueInfo(),
       lpvTechniqueInfo(),
+      vctTechniqueInfo(),
   };
   return registry;
 }

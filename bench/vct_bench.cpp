@@ -1,0 +1,78 @@
+// Voxel cone tracing benchmark (issue 7, item 7): per-kernel device milliseconds (medians over
+// frames after warm-up) of `vct` configurations, and the device memory of each voxel
+// configuration. Sponza 640×360 with its sun when the media are present, else the built-in
+// Cornell box. Not a test: the machine is noisy; docs/PERFORMANCE.md records the numbers.
+//
+//   build/vct_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 5] [--quick]
+// --quick: only the default configuration and the issue's targets (128³).
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "gi/vct/voxel_scene.h"
+#include "scene/cornell_box.h"
+#include "scene/scene_loader.h"
+#include "technique_timing.h"
+
+using namespace gi;
+
+int main(int argc, char** argv) {
+  timing::FrameSettings a;
+  a.frames = 5;
+  std::string scenePath = "scenes/sponza.json";
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    std::string k = argv[i];
+    auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
+    if (k == "--scene") scenePath = next();
+    else if (k == "--width") a.width = std::stoi(next());
+    else if (k == "--height") a.height = std::stoi(next());
+    else if (k == "--frames") a.frames = std::stoi(next());
+    else if (k == "--quick") quick = true;
+    else {
+      std::fprintf(stderr, "usage: vct_bench [--scene S] [--width W --height H] [--frames N] [--quick]\n");
+      return 2;
+    }
+  }
+  try {
+    cl::Context ctx(cl::selectDevice(""));
+    Scene scene;
+    try {
+      scene = loadScene(scenePath, "");
+    } catch (const std::exception& e) {
+      std::printf("(%s not loadable: %s; using the built-in Cornell box)\n", scenePath.c_str(), e.what());
+      scene = makeCornellBox();
+    }
+    std::printf("vct bench: %s (%zu triangles), %dx%d, %s, median of %d frames after %d warm-up\n", scene.name.c_str(),
+                scene.triangleCount(), a.width, a.height, ctx.device().name.c_str(), a.frames, a.warmup);
+    std::printf("targets (issue 7, Sponza 640x360): voxelize 128^3 <= 60 ms, inject <= 5 ms, mips <= 3 ms "
+                "(anisotropic <= 10 ms), 6 diffuse cones half-res + upsample <= 15 ms, full res <= 40 ms, "
+                "specular cone <= 10 ms\n");
+    for (int res : {32, 64, 128, 256})
+      std::printf("memory %3d^3: isotropic %7.1f MB, anisotropic %7.1f MB\n", res,
+                  VoxelScene::bytesFor(res, false) / 1e6, VoxelScene::bytesFor(res, true) / 1e6);
+    struct Config {
+      std::vector<std::string> sets;
+      std::string title;
+    };
+    std::vector<Config> configs = {
+        {{"vct.resolution=128"}, "128^3 isotropic, 6 cones, full resolution, specular, re-voxelized every frame"},
+        {{"vct.resolution=128", "vct.mips=anisotropic"}, "128^3 anisotropic, 6 cones, full resolution"},
+        {{"vct.resolution=128", "vct.downsample=2"}, "128^3 isotropic, 6 cones at half resolution + upsampling"},
+        {{"vct.resolution=128", "vct.mips=anisotropic", "vct.downsample=2"}, "128^3 anisotropic, half resolution"},
+    };
+    if (!quick) {
+      configs.push_back({{"vct.resolution=128", "vct.cones=9"}, "128^3 isotropic, 9 cones (ten Brug)"});
+      configs.push_back({{"vct.resolution=128", "vct.bounces=2"}, "128^3 isotropic, second bounce"});
+      configs.push_back({{"vct.resolution=128", "vct.static=1"}, "128^3 isotropic, voxelized once (static)"});
+      configs.push_back({{"vct.resolution=32"}, "32^3 isotropic"});
+      configs.push_back({{"vct.resolution=64"}, "64^3 isotropic"});
+      configs.push_back({{"vct.resolution=256", "vct.downsample=2"}, "256^3 isotropic, half resolution"});
+    }
+    for (const Config& c : configs) timing::timeTechnique(ctx, scene, a, "vct", c.sets, c.title);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,106 @@
+// Cone tracing through the voxel radiance mips (ALGORITHMS.md §5; Crassin et al. 2011).
+//
+// Positions and distances are in level-0 voxel units, measured from the grid's minimum corner.
+// A cone of half-angle θ from o along unit d: at distance t its diameter is D = max(1, 2·t·tan θ)
+// voxels and it samples the quadrilinearly filtered mip level log2(D). The step is
+// max(½, step_factor·D); since one sample stands for a segment of length D while the march
+// advances by Δt, its opacity is corrected to α' = 1 − (1 − α)^(Δt/D) (and its premultiplied
+// radiance by α'/α), so the accumulated opacity does not depend on the step factor. Front to back:
+//   c += (1 − a)·c_s·α'/α,  a += (1 − a)·α';
+// the occlusion for ambient occlusion accumulates α' weighted by 1/(1 + λ·t) (λ per voxel).
+// The march stops at a ≥ 0.99, past max_distance, or when the cone has left the grid.
+#pragma once
+#include "gi/vct/voxel_grid.h"
+
+typedef struct {
+  float4 radiance;  // rgb: radiance arriving along the cone (W/(m²·sr)); w: accumulated opacity a
+  float occlusion;  // distance-weighted opacity for ambient occlusion
+} ConeResult;
+
+inline ConeResult vct_cone(global const float4* iso, global const float4* aniso, int N, int levels, float3 o, float3 d,
+                           float tanHalf, float maxDistance, float stepFactor, float aoLambda, int anisotropic) {
+  ConeResult r;
+  float3 c = (float3)(0.0f);
+  float a = 0.0f, occ = 0.0f;
+  float t = 0.0f;
+  float limit = (float)N;
+  for (;;) {
+    float diameter = fmax(1.0f, 2.0f * tanHalf * t);
+    float step = fmax(0.5f, stepFactor * diameter);
+    t += step;
+    if (t > maxDistance) break;
+    float3 p = o + d * t;
+    diameter = fmax(1.0f, 2.0f * tanHalf * t);
+    float margin = 0.5f * diameter;
+    if (any(p < -margin) || any(p > limit + margin)) break;
+    float4 s = vox_sample(iso, aniso, N, levels, p, d, log2(diameter), anisotropic);
+    if (s.w > 1e-6f) {
+      float alpha = fmin(s.w, 1.0f);
+      float corrected = 1.0f - powr(1.0f - alpha, step / diameter);
+      c += (1.0f - a) * s.xyz * (corrected / s.w);
+      occ += (1.0f - occ) * corrected / (1.0f + aoLambda * t);
+      a += (1.0f - a) * corrected;
+      if (a >= 0.99f) break;
+    }
+  }
+  r.radiance = (float4)(c, a);
+  r.occlusion = occ;
+  return r;
+}
+
+// Diffuse cone sets around n (local frame z = n): directions, weights w_i (Σ w_i = π, so that
+// E = Σ w_i·L_i reproduces E = π·L under uniform radiance) and the aperture half-angle.
+//  6 cones (ALGORITHMS.md §5): one along n (π/4) and five at 60° from it, 72° apart (3π/20 each);
+//  9 cones (ten Brug, seed 003 §3.4.3): n, the four side directions (±t + n)/√2 at 45° and the four
+//    corners (±t ± b + n)/√3 at 54.7° of the box around n; the thesis gives no weights, we weight by
+//    cos θ_i normalised to π.
+// Both with 60° apertures (half-angle 30°).
+#define VCT_DIFFUSE_TAN_HALF 0.57735027f
+#if GI_VCT_CONES == 6
+#define VCT_CONE_COUNT 6
+constant float4 VCT_CONES[6] = {
+    (float4)(0.0f, 0.0f, 1.0f, 0.78539816f),
+    (float4)(0.86602540f, 0.0f, 0.5f, 0.47123890f),
+    (float4)(0.26761657f, 0.82363910f, 0.5f, 0.47123890f),
+    (float4)(-0.70062927f, 0.50903696f, 0.5f, 0.47123890f),
+    (float4)(-0.70062927f, -0.50903696f, 0.5f, 0.47123890f),
+    (float4)(0.26761657f, -0.82363910f, 0.5f, 0.47123890f),
+};
+#elif GI_VCT_CONES == 9
+#define VCT_CONE_COUNT 9
+// weights: π·cos θ_i / (1 + 4/√2 + 4/√3)
+constant float4 VCT_CONES[9] = {
+    (float4)(0.0f, 0.0f, 1.0f, 0.51184735f),
+    (float4)(0.70710678f, 0.0f, 0.70710678f, 0.36193124f),
+    (float4)(-0.70710678f, 0.0f, 0.70710678f, 0.36193124f),
+    (float4)(0.0f, 0.70710678f, 0.70710678f, 0.36193124f),
+    (float4)(0.0f, -0.70710678f, 0.70710678f, 0.36193124f),
+    (float4)(0.57735027f, 0.57735027f, 0.57735027f, 0.29551631f),
+    (float4)(-0.57735027f, 0.57735027f, 0.57735027f, 0.29551631f),
+    (float4)(0.57735027f, -0.57735027f, 0.57735027f, 0.29551631f),
+    (float4)(-0.57735027f, -0.57735027f, 0.57735027f, 0.29551631f),
+};
+#endif
+
+#ifdef VCT_CONE_COUNT
+// Irradiance (rgb) at a surface point p (voxel units) with normal n from the diffuse cone set,
+// starting start_offset voxels along n; w: ambient-occlusion visibility 1 − Σ (w_i/π)·occlusion_i.
+inline float4 vct_diffuse_irradiance(global const float4* iso, global const float4* aniso, int N, int levels,
+                                     float3 p, float3 n, float startOffset, float maxDistance, float stepFactor,
+                                     float aoLambda, int anisotropic) {
+  float3 t, b;
+  orthonormal_basis(n, &t, &b);
+  float3 o = p + n * startOffset;
+  float3 E = (float3)(0.0f);
+  float occlusion = 0.0f;
+  for (int i = 0; i < VCT_CONE_COUNT; ++i) {
+    float4 cone = VCT_CONES[i];
+    float3 d = normalize(t * cone.x + b * cone.y + n * cone.z);
+    ConeResult r = vct_cone(iso, aniso, N, levels, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
+                            anisotropic);
+    E += cone.w * r.radiance.xyz;
+    occlusion += cone.w * GI_INV_PI * r.occlusion;
+  }
+  return (float4)(E, 1.0f - occlusion);
+}
+#endif

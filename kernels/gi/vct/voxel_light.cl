@@ -1,0 +1,90 @@
+// Light injection and mipmapping of the voxel grid (ALGORITHMS.md §5).
+//
+// vct_inject: per voxel, from the voxelization accumulators (voxel_types.h): opacity α = mean
+//   coverage of the triangles touching it; albedo, emission and normal = their opacity-weighted
+//   means; radiance L = ρ/π · E_direct + L_e, with E_direct the irradiance of every punctual light
+//   on the voxel's mean normal, shadowed through the frame's shadow maps (3×3 PCF). E is evaluated
+//   at the mean of the triangles' points nearest the voxel centre, not at the centre itself: the
+//   centre lies up to √3/2 voxel behind the surface, where the shadow map sees it occluded by the
+//   surface it belongs to. Voxels whose normals cancel (|mean n| < 0.5: both sides of thin
+//   geometry) are lit from both sides (|n·ω|). Output: level 0, (L·α, α).
+// vct_mip_isotropic: parent = mean of its 8 children (premultiplied, so this conserves Σ L·α).
+// vct_mip_anisotropic: per parent and direction, the 2 children along the axis composited front
+//   to back (c = c_f + (1 − α_f)·c_b, α = α_f + (1 − α_f)·α_b), the 4 columns averaged.
+#include "common/lights.h"
+#include "common/shadow.h"
+#include "gi/vct/voxel_grid.h"
+
+kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const GiLight* lights, int lightCount,
+                       global const GiView* shadowViews, global const uint* shadowOffsets,
+                       global const float* shadowDepths, global float4* level0) {
+  int N = grid.resolution;
+  size_t plane = (size_t)N * N * N;
+  size_t v = get_global_id(0);
+  if (v >= plane) return;
+  if (acc[GI_VOX_OPACITY * plane + v] == 0u) {
+    level0[v] = (float4)(0.0f);
+    return;
+  }
+  VoxelSurface vs = vox_resolve(grid, acc, v);
+  float3 p = vs.position, n = vs.normal;
+  bool twoSided = vs.twoSided;
+  float3 E = (float3)(0.0f);
+  for (int li = 0; li < lightCount; ++li) {
+    global const GiLight* l = &lights[li];
+    float3 wi;
+    float dist;
+    float3 Ein = light_incident(l, p, &wi, &dist);
+    float c = dot(n, wi);
+    if (twoSided) c = fabs(c);
+    if (c <= 0.0f || Ein.x + Ein.y + Ein.z <= 0.0f) continue;
+    float3 facing = dot(n, wi) >= 0.0f ? n : -n;
+    E += Ein * c * shadow_visibility(l, shadowViews, shadowOffsets, shadowDepths, p, facing);
+  }
+  float3 L = vs.albedo * GI_INV_PI * E + vs.emission;
+  level0[v] = (float4)(L * vs.alpha, vs.alpha);
+}
+
+// Parent voxels of `level` (≥ 1) from the isotropic level below.
+kernel void vct_mip_isotropic(int N, int level, global float4* iso) {
+  int n = N >> level, nc = n * 2;
+  size_t v = get_global_id(0);
+  if (v >= (size_t)n * n * n) return;
+  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  global const float4* child = iso + vox_level_offset(N, level - 1);
+  float4 sum = (float4)(0.0f);
+  for (int dz = 0; dz < 2; ++dz)
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dx = 0; dx < 2; ++dx) sum += child[((size_t)(2 * z + dz) * nc + (2 * y + dy)) * nc + (2 * x + dx)];
+  iso[vox_level_offset(N, level) + v] = sum * 0.125f;
+}
+
+// Parent voxels of `level` (≥ 1), all 6 directions, from level − 1 (isotropic level 0 or the
+// matching directional volume).
+kernel void vct_mip_anisotropic(int N, int level, global const float4* iso, global float4* aniso) {
+  int n = N >> level, nc = n * 2;
+  size_t cells = (size_t)n * n * n;
+  size_t gid = get_global_id(0);
+  if (gid >= 6 * cells) return;
+  int dir = (int)(gid / cells);
+  size_t v = gid % cells;
+  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  global const float4* child =
+      level == 1 ? iso : (global const float4*)aniso + vox_aniso_offset(N, level - 1, dir);
+  int axis = dir / 2;
+  bool positive = (dir & 1) == 0;  // travelling along +axis: the lower child is in front
+  float4 sum = (float4)(0.0f);
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      int3 c0, c1;  // front and back child of this column
+      int f = positive ? 0 : 1;
+      if (axis == 0) { c0 = (int3)(f, i, j); c1 = (int3)(1 - f, i, j); }
+      else if (axis == 1) { c0 = (int3)(i, f, j); c1 = (int3)(i, 1 - f, j); }
+      else { c0 = (int3)(i, j, f); c1 = (int3)(i, j, 1 - f); }
+      int3 b = (int3)(2 * x, 2 * y, 2 * z);
+      float4 front = child[((size_t)(b.z + c0.z) * nc + (b.y + c0.y)) * nc + (b.x + c0.x)];
+      float4 back = child[((size_t)(b.z + c1.z) * nc + (b.y + c1.y)) * nc + (b.x + c1.x)];
+      sum += front + (1.0f - front.w) * back;
+    }
+  aniso[vox_aniso_offset(N, level, dir) + v] = sum * 0.25f;
+}

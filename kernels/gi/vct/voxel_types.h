@@ -1,0 +1,47 @@
+// The voxel grid of voxel cone tracing (ALGORITHMS.md §5), shared by the host (src/gi/vct/) and
+// the kernels (kernels/gi/vct/). Same layout rules as common/shared_types.h.
+//
+// Grid: resolution N³ cubic voxels of edge voxel_size, a power of two from 32 to 256, whose corner
+// (0, 0, 0) sits at `origin`; mip level l has (N >> l)³ voxels of edge voxel_size · 2^l, down to
+// 1³ (levels = log2 N + 1).
+//
+// Voxelization accumulators (one plane of N³ 32-bit integers per quantity, order-independent
+// integer atomics, ALGORITHMS.md §7). Each triangle–voxel pair adds, in fixed point:
+//   albedo ρ · opacity, emission · opacity, shading normal · opacity, the offset of the
+//   triangle's point nearest the voxel centre from that centre (in voxels) · opacity, opacity, 1.
+#pragma once
+
+#include "../../common/shared_types.h"
+
+#ifndef __OPENCL_VERSION__
+namespace gi {
+#endif
+
+typedef struct {
+  float origin[3];   // world position of the grid's minimum corner
+  float voxel_size;  // edge of a level-0 voxel, metres
+  GI_I32 resolution; // N
+  GI_I32 levels;     // log2(N) + 1
+  GI_I32 pad[2];
+} GiVoxelGrid;  // 32 bytes
+
+// Accumulator planes (plane p of voxel v at acc[p · N³ + v]).
+#define GI_VOX_ALBEDO 0    // 3 planes, uint, ρ·opacity · GI_VOX_UNIT
+#define GI_VOX_EMISSION 3  // 3 planes, uint, L_e·opacity · GI_VOX_EMISSION_UNIT
+#define GI_VOX_NORMAL 6    // 3 planes, int, n·opacity · GI_VOX_UNIT / 4
+#define GI_VOX_OFFSET 9    // 3 planes, int, (nearest point − centre)/voxel_size · opacity · GI_VOX_UNIT / 4
+#define GI_VOX_OPACITY 12  // uint, opacity · GI_VOX_UNIT
+#define GI_VOX_COUNT 13    // uint, triangles touching the voxel
+#define GI_VOX_PLANES 14
+
+// Fixed-point units: values in [0, 1] get 16 fractional bits, so 65535 contributions fit in 32 bits
+// (signed quantities in [-2, 2] one bit fewer). Emission (W/(m²·sr)) gets 8 fractional bits and
+// is clamped at 65535 per contribution.
+#define GI_VOX_UNIT 65536.0f
+#define GI_VOX_EMISSION_UNIT 256.0f
+#define GI_VOX_EMISSION_MAX 65535.0f
+
+#ifndef __OPENCL_VERSION__
+}  // namespace gi
+static_assert(sizeof(gi::GiVoxelGrid) == 32, "GiVoxelGrid layout");
+#endif

@@ -1,0 +1,133 @@
+// `vct`: voxel cone tracing (Crassin et al. 2011 as in seed 003 §3.4; ALGORITHMS.md §5).
+// A frame: voxelize (every frame, or once with vct.static=1) -> inject direct light from the
+// shadow maps -> isotropic or anisotropic mips -> [second bounce: cone-trace every voxel, inject,
+// re-mip] -> diffuse cones per pixel (optionally at reduced resolution + geometry-aware upsampling)
+// -> one specular cone per pixel. docs/techniques/vct.md.
+#include "gi/vct/vct_technique.h"
+
+#include <memory>
+
+#include "gi/filters/discontinuity_filter.h"
+#include "gi/vct/voxel_scene.h"
+
+namespace gi {
+
+namespace {
+
+// Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
+struct VctTraceParams {
+  float startOffset, maxDistance, stepFactor, aoLambda;
+  int32_t anisotropic, applyAo, pad[2];
+};
+static_assert(sizeof(VctTraceParams) == 32, "VctTraceParams layout");
+
+class VctTechnique : public Technique {
+public:
+  std::string name() const override { return "vct"; }
+
+  void setup(const FrameResources& f) override {
+    int res = f.params.getInt("vct.resolution");
+    voxels_ = std::make_unique<VoxelScene>(f.ctx, f.scene, res);
+    upsampler_ = std::make_unique<GeometryAwareUpsampler>(f.ctx, "vct: upsample");
+  }
+
+  void render(const FrameResources& f, cl::Buffer& indirect) override {
+    const ParamSet& p = f.params;
+    bool anisotropic = p.getChoice("vct.mips") == "anisotropic";
+    int cones = std::stoi(p.getChoice("vct.cones"));
+    int down = p.getInt("vct.downsample");
+    if (cones != cones_ || down != down_) {
+      program_ = f.ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
+                                    {{"GI_VCT_CONES", std::to_string(cones)}, {"GI_DOWN", std::to_string(down)}});
+      diffuse_ = program_.kernel("vct_diffuse");
+      specular_ = program_.kernel("vct_specular");
+      bounce_ = program_.kernel("vct_bounce");
+      cones_ = cones;
+      down_ = down;
+    }
+    const GiVoxelGrid& grid = voxels_->grid();
+    float s = grid.voxel_size;
+    VctTraceParams tp{};
+    tp.startOffset = p.getFloat("vct.start_offset");
+    tp.maxDistance = p.getFloat("vct.max_distance") * float(grid.resolution);
+    tp.stepFactor = p.getFloat("vct.step_factor");
+    tp.aoLambda = p.getFloat("vct.ao_lambda") * s;
+    tp.anisotropic = anisotropic ? 1 : 0;
+    tp.applyAo = p.getChoice("vct.ao") == "voxel" ? 1 : 0;
+
+    if (!voxelized_ || !p.getBool("vct.static")) {
+      voxels_->voxelize(f.deviceScene);
+      voxelized_ = true;
+    }
+    voxels_->inject(f.deviceScene, f.shadowMaps);
+    voxels_->buildMips(anisotropic);
+    const cl::Buffer& aniso = anisotropic ? voxels_->aniso() : voxels_->iso();  // unread when isotropic
+    if (p.getInt("vct.bounces") == 2) {
+      size_t n = voxels_->voxelCount();
+      if (!bounced_) bounced_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "vct second-bounce level 0");
+      VctTraceParams bp = tp;
+      bp.applyAo = 0;
+      bounce_.args(grid, bp, voxels_->accumulators(), voxels_->iso(), aniso, bounced_);
+      f.ctx.launch(bounce_, cl::NDRange::d1(cl::roundUp(n, 64), 64), "vct: second bounce");
+      f.ctx.copy(bounced_, voxels_->iso(), n * 16);
+      voxels_->buildMips(anisotropic);
+    }
+
+    const GBuffer& g = f.gbuffer;
+    int lw = (g.width + down - 1) / down, lh = (g.height + down - 1) / down;
+    cl::Buffer* target = &indirect;
+    if (down > 1) {
+      if (!low_ || low_.bytes() != size_t(lw) * lh * 16)
+        low_ = cl::Buffer(f.ctx, size_t(lw) * lh * 16, CL_MEM_READ_WRITE, "vct low-res irradiance");
+      target = &low_;
+    }
+    diffuse_.args(grid, tp, voxels_->iso(), aniso, g.width, g.height, lw, lh, g.position, g.normal, g.albedo, *target);
+    f.ctx.launch(diffuse_, cl::NDRange::d2(cl::roundUp(lw, 8), cl::roundUp(lh, 8), 8, 8), "vct: diffuse cones");
+    if (down > 1) {
+      GeometryTest t;
+      t.tauZ = p.getFloat("vct.tau_z");
+      t.tauNDegrees = p.getFloat("vct.tau_n");
+      upsampler_->run(g, low_, down, t, indirect);
+    }
+    if (p.getBool("vct.specular")) {
+      specular_.args(grid, tp, voxels_->iso(), aniso, g.view, g.position, g.normal, g.specular, indirect);
+      f.ctx.launch(specular_, cl::NDRange::d2(cl::roundUp(g.width, 8), cl::roundUp(g.height, 8), 8, 8),
+                   "vct: specular cone");
+    }
+  }
+
+private:
+  std::unique_ptr<VoxelScene> voxels_;
+  std::unique_ptr<GeometryAwareUpsampler> upsampler_;
+  cl::Program program_;
+  cl::Kernel diffuse_, specular_, bounce_;
+  cl::Buffer low_, bounced_;
+  int cones_ = 0, down_ = 0;
+  bool voxelized_ = false;
+};
+
+}  // namespace
+
+TechniqueInfo vctTechniqueInfo() {
+  return {"vct", "voxel cone tracing (Crassin et al. 2011): voxelized scene, injected direct light, mipmapped, diffuse + specular cones",
+          [](ParamSet& p) {
+            p.addInt("vct.resolution", 128, 32, 256, "voxel grid resolution N (N³ cubic voxels over the scene; power of two)");
+            p.addChoice("vct.mips", "anisotropic", {"isotropic", "anisotropic"},
+                        "mip filtering: isotropic (mean of 8 children) or anisotropic (6 directional volumes)");
+            p.addChoice("vct.cones", "6", {"6", "9"}, "diffuse cone set: 6 cones (ALGORITHMS §5) or ten Brug's 9 cones; 60° apertures");
+            p.addFloat("vct.start_offset", 1.0, 0.0, 16.0, "cone origin offset along the normal, in voxels");
+            p.addFloat("vct.step_factor", 0.5, 0.05, 4.0, "march step as a fraction of the cone diameter (at least ½ voxel)");
+            p.addFloat("vct.max_distance", 1.0, 0.01, 2.0, "maximum cone length as a fraction of the grid edge");
+            p.addBool("vct.specular", true, "trace one specular cone per pixel (aperture tan θ = GGX α)");
+            p.addChoice("vct.ao", "off", {"off", "voxel"}, "voxel ambient occlusion: multiply the diffuse indirect light by it");
+            p.addFloat("vct.ao_lambda", 1.0, 0.0, 1000.0, "AO distance falloff 1/(1 + λ·d), λ per metre");
+            p.addInt("vct.bounces", 1, 1, 2, "1: direct light injected; 2: also the cone-traced first bounce (second bounce)");
+            p.addInt("vct.downsample", 1, 1, 4, "trace the diffuse cones at 1/downsample resolution, then upsample geometry-aware");
+            p.addFloat("vct.tau_z", 0.05, 0.0, 10.0, "upsampling: relative view-depth tolerance");
+            p.addFloat("vct.tau_n", 25.0, 0.0, 180.0, "upsampling: geometric-normal tolerance in degrees");
+            p.addBool("vct.static", false, "voxelize once and keep the voxels (static geometry); false: every frame");
+          },
+          [] { return std::make_unique<VctTechnique>(); }};
+}
+
+}  // namespace gi

@@ -1,0 +1,6 @@
+#pragma once
+#include "gi/technique.h"
+
+namespace gi {
+TechniqueInfo vctTechniqueInfo();
+}

@@ -1,0 +1,119 @@
+#include "gi/vct/voxel_scene.h"
+
+#include <algorithm>
+#include <set>
+
+#include "scene/lights.h"
+#include "util/error.h"
+
+namespace gi {
+
+namespace {
+
+int log2Exact(int n) {
+  int l = 0;
+  while ((1 << l) < n) ++l;
+  return l;
+}
+
+// Per instance: 1 when its emission belongs in the voxels. Emitters that have a spot/point
+// stand-in (lights.h) already light the scene through that light in the direct pass and in the
+// injected direct irradiance; putting their emission into the voxels as well would let the cones
+// gather the same light a second time.
+std::vector<uint32_t> instanceEmissionFlags(const Scene& scene) {
+  std::set<std::string> standIns;
+  for (const std::string& n : scene.lightNames)
+    if (n.rfind(kEmitterLightPrefix, 0) == 0) standIns.insert(n.substr(std::string(kEmitterLightPrefix).size()));
+  uint32_t instances = 1;
+  for (uint32_t i : scene.triangleInstance) instances = std::max(instances, i + 1);
+  std::vector<uint32_t> flags(instances, 1);
+  for (uint32_t i = 0; i < instances; ++i) {
+    std::string name = i < scene.instanceNames.size() && !scene.instanceNames[i].empty() ? scene.instanceNames[i]
+                                                                                         : "instance" + std::to_string(i);
+    if (standIns.count(name)) flags[i] = 0;
+  }
+  return flags;
+}
+
+}  // namespace
+
+GiVoxelGrid fitVoxelGrid(const Bounds& bounds, int resolution) {
+  if (resolution < 32 || resolution > 256 || (resolution & (resolution - 1)) != 0)
+    throw Error("vct.resolution = " + std::to_string(resolution) + ": the voxel grid resolution must be a power of two (32, 64, 128 or 256)");
+  glm::vec3 e = bounds.valid() ? bounds.extent() : glm::vec3(1.0f);
+  float extent = std::max({e.x, e.y, e.z, 1e-6f});
+  float voxel = extent / float(resolution - 2);  // one empty voxel of margin on each side
+  glm::vec3 origin = (bounds.valid() ? bounds.center() : glm::vec3(0.0f)) - 0.5f * voxel * float(resolution);
+  GiVoxelGrid g{};
+  g.origin[0] = origin.x;
+  g.origin[1] = origin.y;
+  g.origin[2] = origin.z;
+  g.voxel_size = voxel;
+  g.resolution = resolution;
+  g.levels = log2Exact(resolution) + 1;
+  return g;
+}
+
+uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic) {
+  uint64_t n = uint64_t(resolution) * resolution * resolution, bytes = n * GI_VOX_PLANES * 4;
+  for (int l = 0; (resolution >> l) > 0; ++l) bytes += (n >> (3 * l)) * 16 * (anisotropic && l > 0 ? 7 : 1);
+  return bytes;
+}
+
+VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
+    : ctx_(ctx), grid_(fitVoxelGrid(scene.bounds, resolution)) {
+  voxelizeProgram_ = ctx.buildProgram("kernels/gi/vct/voxelize.cl");
+  clear_ = voxelizeProgram_.kernel("vct_clear");
+  voxelize_ = voxelizeProgram_.kernel("vct_voxelize");
+  lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl");
+  inject_ = lightProgram_.kernel("vct_inject");
+  mipIso_ = lightProgram_.kernel("vct_mip_isotropic");
+  mipAniso_ = lightProgram_.kernel("vct_mip_anisotropic");
+  instanceEmits_ = ctx.upload(instanceEmissionFlags(scene), "vct instance emission flags");
+  uint64_t n = voxelCount();
+  uint64_t chain = 0;
+  for (int l = 0; l < grid_.levels; ++l) chain += (n >> (3 * l));
+  ctx.requireAllocation(n * GI_VOX_PLANES * 4, "vct voxelization accumulators (vct.resolution)");
+  ctx.requireAllocation(chain * 16, "vct radiance mips (vct.resolution)");
+  acc_ = cl::Buffer(ctx, n * GI_VOX_PLANES * 4, CL_MEM_READ_WRITE, "vct voxelization accumulators");
+  iso_ = cl::Buffer(ctx, chain * 16, CL_MEM_READ_WRITE, "vct radiance mips");
+}
+
+void VoxelScene::voxelize(const DeviceScene& scene) {
+  uint32_t words = uint32_t(voxelCount() * GI_VOX_PLANES);
+  clear_.args(acc_, words);
+  ctx_.launch(clear_, cl::NDRange::d1(cl::roundUp(words, 256), 256), "vct: clear");
+  if (scene.triangleCount == 0) return;
+  voxelize_.args(grid_, scene.positions, scene.normals, scene.uvs, scene.triangles, scene.triangleInstance,
+                 scene.materials, scene.textures, scene.texels, instanceEmits_, scene.triangleCount, acc_);
+  ctx_.launch(voxelize_, cl::NDRange::d1(cl::roundUp(scene.triangleCount, 64), 64), "vct: voxelize");
+}
+
+void VoxelScene::inject(const DeviceScene& scene, const ShadowMapSet& shadows) {
+  uint32_t n = uint32_t(voxelCount());
+  inject_.args(grid_, acc_, scene.lights, int(scene.lightCount), shadows.viewTable, shadows.offsetTable,
+               shadows.depths, iso_);
+  ctx_.launch(inject_, cl::NDRange::d1(cl::roundUp(n, 256), 256), "vct: inject");
+}
+
+void VoxelScene::buildMips(bool anisotropic) {
+  int N = grid_.resolution;
+  if (anisotropic && !aniso_) {
+    uint64_t bytes = 0;
+    for (int l = 1; l < grid_.levels; ++l) bytes += 6 * (voxelCount() >> (3 * l)) * 16;
+    ctx_.requireAllocation(bytes, "vct anisotropic mips (vct.resolution)");
+    aniso_ = cl::Buffer(ctx_, bytes, CL_MEM_READ_WRITE, "vct anisotropic mips");
+  }
+  for (int l = 1; l < grid_.levels; ++l) {
+    size_t cells = voxelCount() >> (3 * l);
+    if (anisotropic) {
+      mipAniso_.args(N, l, iso_, aniso_);
+      ctx_.launch(mipAniso_, cl::NDRange::d1(cl::roundUp(6 * cells, 64), 64), "vct: mips (anisotropic)");
+    } else {
+      mipIso_.args(N, l, iso_);
+      ctx_.launch(mipIso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (isotropic)");
+    }
+  }
+}
+
+}  // namespace gi

@@ -1,0 +1,55 @@
+// The voxel representation of voxel cone tracing (ALGORITHMS.md §5): a cubic grid over the scene
+// bounds, its voxelization (kernels/gi/vct/voxelize.cl), light injection from the frame's shadow
+// maps and the isotropic or anisotropic mip chain (kernels/gi/vct/voxel_light.cl).
+//
+//   VoxelScene vs(ctx, scene, 128);
+//   vs.voxelize(deviceScene);                     // once for static geometry, or every frame
+//   vs.inject(deviceScene, shadowMaps);           // every frame: level 0 radiance
+//   vs.buildMips(anisotropic);                    // levels 1 … log2 N
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "cl/runtime.h"
+#include "kernels/gi/vct/voxel_types.h"
+#include "raster/gbuffer.h"
+#include "scene/device_scene.h"
+#include "scene/scene.h"
+
+namespace gi {
+
+// Cubic grid of resolution N (power of two, 32…256) around `bounds`, with one empty voxel of margin
+// on every side so that geometry on the bounds lies inside.
+GiVoxelGrid fitVoxelGrid(const Bounds& bounds, int resolution);
+
+class VoxelScene {
+public:
+  VoxelScene(cl::Context& ctx, const Scene& scene, int resolution);
+
+  const GiVoxelGrid& grid() const { return grid_; }
+  int resolution() const { return grid_.resolution; }
+  uint64_t voxelCount() const { return uint64_t(grid_.resolution) * grid_.resolution * grid_.resolution; }
+
+  // Clears the accumulators and voxelizes every triangle.
+  void voxelize(const DeviceScene& scene);
+  // Level 0: L = ρ/π·E_direct + L_e (premultiplied by opacity) from the lights and shadow maps.
+  void inject(const DeviceScene& scene, const ShadowMapSet& shadows);
+  // Levels 1 … log2 N from level 0: isotropic (`iso`) or 6 directional volumes (`aniso`).
+  void buildMips(bool anisotropic);
+
+  const cl::Buffer& accumulators() const { return acc_; }  // GI_VOX_PLANES planes of N³ (voxel_types.h)
+  cl::Buffer& iso() { return iso_; }      // float4 per voxel, all isotropic levels (voxel_grid.h)
+  cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (allocated on first use)
+  uint64_t bytes() const { return acc_.bytes() + iso_.bytes() + aniso_.bytes(); }
+  // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes).
+  static uint64_t bytesFor(int resolution, bool anisotropic);
+
+private:
+  cl::Context& ctx_;
+  GiVoxelGrid grid_{};
+  cl::Program voxelizeProgram_, lightProgram_;
+  cl::Kernel clear_, voxelize_, inject_, mipIso_, mipAniso_;
+  cl::Buffer instanceEmits_, acc_, iso_, aniso_;
+};
+
+}  // namespace gi

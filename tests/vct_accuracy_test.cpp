@@ -1,0 +1,111 @@
+// Voxel cone tracing accuracy against the reference path tracer at 128×128 (issue 7). Bounds are
+// stated here and in docs/techniques/vct.md:
+//   - empty Cornell box lit by the downward punctual spot light (as the vpl accuracy test): `vct`
+//     diffuse only (no specular cone) against the one-bounce-indirect diffuse reference (stored
+//     converged image when present, reference_store.h; else 512 spp in the test).
+//     Asserted: mean indirect radiance within 25 % (the issue's bound; measured +3 %).
+//   - full Cornell box (blocks), same spot, full image (direct + vct with the second bounce)
+//     against the full reference (512 spp): asserted SSIM ≥ 0.60 (measured 0.66); the issue asks
+//     0.85, NOT met (docs/techniques/vct.md: reference noise and the missing third+ bounces).
+//   - Sponza (small, 96×54) with its sun, full image against a 16-spp reference: measured and
+//     printed with a sanity bound (see the docs page for the measured value and why the issue's
+//     0.85 cannot be judged against a 16-spp reference). Skipped without media.
+//   - the thin-wall leak (builtin:thin_wall): the indirect light in the dark room B (reference:
+//     none) as a fraction of that in the lit room A, isotropic and anisotropic mips, measured and
+//     bounded.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <optional>
+
+#include "accuracy_support.h"
+#include "metrics/metrics.h"
+#include "render/renderer.h"
+#include "scene/thin_wall.h"
+#include "test_support.h"
+
+using namespace gi;
+using test::cornellWithSpot;
+using test::meanOf;
+
+TEST(VctAccuracy, EmptyCornellBoxOneBounceMean) {
+  Scene s = cornellWithSpot(false);
+  test::AccuracyPair p = test::renderAgainstReference(s, "vct", 128, 128, {"vct.resolution=64", "vct.specular=0"}, true,
+                                                      ReferenceMode::OneBounce, true,
+                                                      "cornell_empty_spot_one_bounce_diffuse_128", 512);
+  double mr = meanOf(p.raster), mp = meanOf(p.reference);
+  double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+  std::printf("empty Cornell box, one-bounce indirect, vct 64^3: mean %.5f vs reference %.5f (%+.1f %%, bound 25 %%), "
+              "SSIM %.4f\n", mr, mp, 100.0 * (mr / mp - 1.0), ssim);
+  EXPECT_NEAR(mr / mp, 1.0, 0.25);
+}
+
+TEST(VctAccuracy, FullCornellBoxFullImageSsim) {
+  Scene s = cornellWithSpot(true);
+  test::AccuracyPair p = test::renderAgainstReference(s, "vct", 128, 128, {"vct.resolution=64", "vct.bounces=2"},
+                                                      false, ReferenceMode::Full, false, "cornell_spot_full_128", 512);
+  double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+  std::printf("Cornell box (blocks), spot light, direct + vct 64^3 (2 bounces) vs full reference: SSIM %.4f "
+              "(bound 0.60; issue target 0.85), mean %.5f vs %.5f\n", ssim, meanOf(p.raster), meanOf(p.reference));
+  EXPECT_GE(ssim, 0.60);
+}
+
+TEST(VctAccuracy, SponzaSmallFullImageSsim) {
+  std::string why;
+  std::optional<Scene> sponza = test::loadSponza(why);
+  if (!sponza) GTEST_SKIP() << why;
+  const Scene& s = *sponza;
+  test::AccuracyPair p = test::renderAgainstReference(s, "vct", 96, 54, {"vct.resolution=64", "shadow.resolution=1024"},
+                                                      false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
+  double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+  std::printf("Sponza 96x54, sun, direct + vct 64^3 vs full reference (16 spp): SSIM %.4f (sanity bound 0.45; "
+              "issue target 0.85 not judged against a 16-spp reference), mean %.5f vs %.5f\n",
+              ssim, meanOf(p.raster), meanOf(p.reference));
+  EXPECT_GE(ssim, 0.45);
+}
+
+namespace {
+
+// Mean indirect radiance of the thin-wall scene's camera image over room B (the left part of the
+// image) and room A (the right part), leaving out the columns around the wall.
+std::pair<double, double> thinWallIndirect(const Scene& s, std::vector<std::string> sets) {
+  RenderSettings rs;
+  rs.width = 128;
+  rs.height = 64;
+  rs.technique = "vct";
+  rs.sets = std::move(sets);
+  Renderer r(test::context(), s, rs);
+  r.renderFrame();
+  Image im = r.indirectRadiance();
+  double b = 0, a = 0;
+  size_t nb = 0, na = 0;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) {
+      double v = (im.at(x, y)[0] + im.at(x, y)[1] + im.at(x, y)[2]) / 3.0;
+      if (x < im.width / 2 - 8) { b += v; ++nb; }
+      if (x >= im.width / 2 + 8) { a += v; ++na; }
+    }
+  return {b / double(nb), a / double(na)};
+}
+
+}  // namespace
+
+TEST(VctAccuracy, ThinWallLeakIsotropicVsAnisotropic) {
+  // builtin:thin_wall (scene/thin_wall.h): the path tracer's room B is exactly black, so all the
+  // indirect light vct puts there is leak through the 2 cm wall (thinner than a 64³ voxel).
+  Scene s = makeThinWallScene();
+  double fraction[2];
+  for (int an = 0; an < 2; ++an) {
+    const char* mips = an ? "anisotropic" : "isotropic";
+    auto [roomB, roomA] = thinWallIndirect(s, {"vct.resolution=64", "vct.specular=0", std::string("vct.mips=") + mips});
+    fraction[an] = roomB / roomA;
+    std::printf("thin wall, 64^3, %s mips: indirect in the lit room A %.5f, leaked into room B %.5f (reference 0): "
+                "%.2f %% of room A\n", mips, roomA, roomB, 100.0 * fraction[an]);
+    EXPECT_GT(roomA, 0.0);
+  }
+  // Measured 1.8 % (isotropic) and 3.0 % (anisotropic). Anisotropic mips keep the wall opaque seen
+  // along x, yet leak more: a cone leaning over it weights in the ±y volumes, where the lit floor
+  // and ceiling of room A are opaque and the wall, edge-on, is diluted (docs/techniques/vct.md).
+  EXPECT_LT(fraction[0], 0.03);
+  EXPECT_LT(fraction[1], 0.05);
+}
