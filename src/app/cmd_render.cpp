@@ -131,16 +131,8 @@ void run(RenderArgs& a) {
 void registerRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   auto* cmd = app.add_subcommand("render", "Render a scene with a technique and write the image");
-  cmd->add_option("scene", args->scene,
-                  "scene: a .gltf/.glb file, a scene config .json, or nothing for the built-in Cornell box");
-  cmd->add_option("--width", args->settings.width, "image width in pixels (default: the scene's)")->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", args->settings.height, "image height in pixels (default: the scene's)")->check(CLI::Range(1, 16384));
-  cmd->add_option("--camera", args->settings.camera, "camera name or index (default: the scene's default camera)");
-  cmd->add_option("--technique", args->settings.technique, "GI technique (direct = direct lighting only)");
+  addRenderSettingsOptions(cmd, args->scene, args->settings);
   cmd->add_option("--out", args->out, "output image: .png (display-transformed, 8-bit sRGB) or .exr (linear)");
-  cmd->add_option("--set", args->settings.sets, "parameter assignment name=value (repeatable; see --list-params)")
-      ->expected(1)
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_flag("--list-params", args->listParams, "print every parameter with its default and range, then exit");
   cmd->add_flag("--timings", args->timings, "print per-kernel device milliseconds");
   cmd->add_option("--json", args->jsonPath, "write timings, settings and device as JSON to this file");

@@ -7,6 +7,7 @@ void registerCommands(CLI::App& app) {
   registerRenderCommand(app);
   registerCompareCommand(app);
   registerReferenceCommand(app);
+  registerBenchCommand(app);
 }
 
 }  // namespace gi::app

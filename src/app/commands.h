@@ -11,5 +11,6 @@ void registerDevicesCommand(CLI::App& app);
 void registerRenderCommand(CLI::App& app);
 void registerCompareCommand(CLI::App& app);
 void registerReferenceCommand(CLI::App& app);
+void registerBenchCommand(CLI::App& app);
 
 }  // namespace gi::app
