@@ -20,6 +20,11 @@ packages=(
   libgtest-dev libbenchmark-dev
   python3 python3-pip python3-numpy
 )
+# Only the tests need these: chromium renders the sweep report (tests/sweep_report_test.cpp), and a
+# single-node Slurm runs a sharded sweep as a job array (tests/slurm_sweep_test.sh).
+if [ "$mode" = test ]; then
+  packages+=(chromium slurmctld slurmd slurm-client)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -8,6 +8,7 @@ void registerCommands(CLI::App& app) {
   registerCompareCommand(app);
   registerReferenceCommand(app);
   registerBenchCommand(app);
+  registerSweepCommand(app);
 }
 
 }  // namespace gi::app

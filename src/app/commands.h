@@ -12,5 +12,6 @@ void registerRenderCommand(CLI::App& app);
 void registerCompareCommand(CLI::App& app);
 void registerReferenceCommand(CLI::App& app);
 void registerBenchCommand(CLI::App& app);
+void registerSweepCommand(CLI::App& app);
 
 }  // namespace gi::app
