@@ -2,6 +2,10 @@
 // and, through the real binary on tiny configurations (built-in Cornell box, 32x32): a failing
 // configuration recorded while the sweep goes on, resume without redoing finished work, and a
 // 2-shard run merged equal to the unsharded run (same configurations, statuses and image bytes).
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -189,5 +193,21 @@ TEST(Sweep, RecordsFailuresResumesAndShardsMergeToTheSameResults) {
                   (dir / "merged").string() + " --no-report");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_EQ(outcome(dir / "merged"), outcome(dir / "all"));
+  fs::remove_all(dir);
+}
+
+TEST(Sweep, RefusesAFolderAnotherSweepIsWriting) {
+  auto dir = test::tempDir("sweep_lock");
+  fs::path spec = dir / "spec.json";
+  std::ofstream(spec) << R"({"resolutions": ["16x16"], "techniques": ["direct"]})";
+  fs::create_directories(dir / "out");
+  int fd = ::open((dir / "out" / ".lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(flock(fd, LOCK_EX | LOCK_NB), 0);  // as a running sweep holds it
+  test::CommandResult r = test::runGi("sweep " + spec.string() + " --out " + (dir / "out").string(), "GI_DEVICE=cpu");
+  ::close(fd);
+  EXPECT_NE(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("another gi sweep is writing"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "runs"));
   fs::remove_all(dir);
 }

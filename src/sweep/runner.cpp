@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -129,6 +130,27 @@ std::string formatDuration(double s) {
   return buf;
 }
 
+// Holds an exclusive lock on <dir>/.lock while a sweep or merge writes into the folder, so that
+// a second `gi sweep` on the same folder stops with a message instead of racing the first.
+class FolderLock {
+public:
+  explicit FolderLock(const fs::path& dir) {
+    fs::create_directories(dir);
+    fd_ = ::open((dir / ".lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw Error("cannot create " + (dir / ".lock").string() + ": " + std::strerror(errno));
+    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      throw Error("another gi sweep is writing into '" + dir.string() + "' (it holds " + (dir / ".lock").string() + ")");
+    }
+  }
+  ~FolderLock() { ::close(fd_); }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+private:
+  int fd_ = -1;
+};
+
 // Makes `dir` hold `specJson`: creates it, or checks that it already holds the same spec.
 void claimFolder(const fs::path& dir, const json& specJson) {
   fs::create_directories(dir / "runs");
@@ -248,6 +270,7 @@ int runSweep(const std::string& specPath, const RunOptions& o) {
   }
   Spec spec = parseSpec(specJson);
   fs::path dir = o.outDir;
+  FolderLock lock(dir);
   claimFolder(dir, specJson);
 
   std::vector<Configuration> todo = selectShard(spec.configurations, o.shard);
@@ -316,6 +339,7 @@ void mergeSweeps(const std::vector<std::string>& dirs, const std::string& outDir
   }
   parseSpec(specJson);  // the same checks as a run
   fs::path out = outDir;
+  FolderLock lock(out);
   claimFolder(out, specJson);
   std::map<std::string, std::string> chosenStatus;
   for (auto& e : fs::directory_iterator(out / "runs")) chosenStatus[e.path().filename()] = resultStatus(e.path() / "result.json");
