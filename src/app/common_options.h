@@ -28,7 +28,7 @@ inline void addRenderSettingsOptions(CLI::App* cmd, std::string& scene, RenderSe
   cmd->add_option("--width", s.width, "image width in pixels (default: the scene's)")->check(CLI::Range(1, 16384));
   cmd->add_option("--height", s.height, "image height in pixels (default: the scene's)")->check(CLI::Range(1, 16384));
   cmd->add_option("--camera", s.camera, "camera name or index (default: the scene's default camera)");
-  cmd->add_option("--technique", s.technique, "GI technique (direct = direct lighting only)");
+  cmd->add_option("--technique", s.technique, "GI technique (direct = direct lighting only) or a chain: source+modifier, e.g. lpv+ssao");
   cmd->add_option("--set", s.sets, "parameter assignment name=value (repeatable; see gi render --list-params)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);

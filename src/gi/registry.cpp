@@ -5,6 +5,7 @@
 #include "gi/splat/splat_technique.h"
 #include "gi/lpv/lpv_technique.h"
 #include "gi/vct/vct_technique.h"
+#include "gi/ssao/ssao_technique.h"
 
 namespace gi {
 
@@ -16,6 +17,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       splatTechniqueInfo(),
       lpvTechniqueInfo(),
       vctTechniqueInfo(),
+      ssaoTechniqueInfo(),
   };
   return registry;
 }

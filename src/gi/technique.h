@@ -29,6 +29,8 @@ struct FrameResources {
   const ShadowMapSet& shadowMaps;
   const std::vector<ReflectiveShadowMap>& rsms;  // one per light when the technique asks for them
   const ParamSet& params;
+  const cl::Buffer& direct;  // direct radiance (emission included) per camera pixel, float4
+  bool upstreamIndirect;     // an earlier technique of the chain has written the indirect buffer
 };
 
 class Technique {
@@ -36,9 +38,14 @@ public:
   virtual ~Technique() = default;
   virtual std::string name() const = 0;
   virtual bool needsRsm() const { return false; }
+  // A modifier reads the indirect radiance the techniques before it in the chain wrote
+  // (`--technique lpv+ssao`) and rewrites it in place; a source technique overwrites it and must
+  // come first. See Renderer and docs/RENDERING.md ("Technique chains").
+  virtual bool modifiesIndirect() const { return false; }
   // Builds programs and allocates buffers; called once before the first frame.
   virtual void setup(const FrameResources& frame) {}
-  // Writes indirect radiance for every camera pixel into `indirect` (float4 per pixel).
+  // Writes indirect radiance for every camera pixel into `indirect` (float4 per pixel); a
+  // modifier reads it first when frame.upstreamIndirect is set.
   virtual void render(const FrameResources& frame, cl::Buffer& indirect) = 0;
 };
 

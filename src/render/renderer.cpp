@@ -46,16 +46,11 @@ Renderer::Renderer(cl::Context& ctx, const Scene& scene, const RenderSettings& s
   camera_ = selectCamera(scene_, settings.camera);
   cameraView_ = makeCameraView(camera_, width_, height_);
 
-  const TechniqueInfo* info = nullptr;
   if (settings.technique != "direct") {
-    info = findTechnique(settings.technique);
-    if (!info) {
-      std::string names = "direct";
-      for (auto& t : techniqueRegistry()) names += ", " + t.name;
-      throw Error("unknown technique '" + settings.technique + "' (available: " + names + ")");
+    for (const TechniqueInfo* info : parseTechniqueChain(settings.technique)) {
+      chain_.push_back(info->create());
+      wantRsm_ = wantRsm_ || chain_.back()->needsRsm();
     }
-    technique_ = info->create();
-    wantRsm_ = technique_->needsRsm();
   }
 
   raster_ = std::make_unique<RasterPasses>(ctx_);
@@ -76,13 +71,41 @@ Renderer::Renderer(cl::Context& ctx, const Scene& scene, const RenderSettings& s
   ctx_.fill(indirect_, 0.0f);
   rsms_.resize(wantRsm_ ? scene_.lights.size() : 0);
   gbuffer_.allocate(ctx_, width_, height_);
-  if (technique_)
-    technique_->setup(FrameResources{ctx_, scene_, *deviceScene_, gbuffer_, shadowMaps_, rsms_, params_});
+  for (size_t i = 0; i < chain_.size(); ++i) chain_[i]->setup(frameResources(i > 0));
   ctx_.finish();
   ctx_.profiler().discard();
 }
 
 Renderer::~Renderer() = default;
+
+FrameResources Renderer::frameResources(bool upstreamIndirect) const {
+  return FrameResources{ctx_, scene_, *deviceScene_, gbuffer_, shadowMaps_, rsms_, params_, direct_, upstreamIndirect};
+}
+
+std::vector<const TechniqueInfo*> parseTechniqueChain(const std::string& chain) {
+  std::vector<const TechniqueInfo*> out;
+  size_t start = 0;
+  for (;;) {
+    size_t plus = chain.find('+', start);
+    std::string name = chain.substr(start, plus == std::string::npos ? std::string::npos : plus - start);
+    const TechniqueInfo* info = findTechnique(name);
+    if (!info) {
+      std::string names = "direct";
+      for (auto& t : techniqueRegistry()) names += ", " + t.name;
+      throw Error("unknown technique '" + name + "' in '" + chain + "' (available: " + names +
+                  "; chain them with '+', e.g. lpv+ssao)");
+    }
+    for (const TechniqueInfo* seen : out)
+      if (seen == info) throw Error("technique '" + name + "' appears twice in '" + chain + "'");
+    if (!out.empty() && !info->create()->modifiesIndirect())
+      throw Error("technique '" + name + "' computes the indirect term itself and must come first in '" + chain +
+                  "' (only modifiers such as ssao may follow another technique)");
+    out.push_back(info);
+    if (plus == std::string::npos) break;
+    start = plus + 1;
+  }
+  return out;
+}
 
 PassTimes Renderer::renderFrame() {
   // Nothing in a scene moves yet, so with shadow.static the maps of the first frame stay valid.
@@ -103,8 +126,8 @@ PassTimes Renderer::renderFrame() {
   ctx_.launch(directKernel_, cl::NDRange::d2(cl::roundUp(groupsX, lx), cl::roundUp(height_, ly), lx, ly),
               "direct lighting");
 
-  if (technique_) {
-    technique_->render(FrameResources{ctx_, scene_, *deviceScene_, gbuffer_, shadowMaps_, rsms_, params_}, indirect_);
+  if (!chain_.empty()) {
+    for (size_t i = 0; i < chain_.size(); ++i) chain_[i]->render(frameResources(i > 0), indirect_);
     uint32_t n = uint32_t(width_) * height_;
     composeKernel_.args(direct_, indirect_, final_, n);
     ctx_.launch(composeKernel_, cl::NDRange::d1(n, 256), "compose");
@@ -128,7 +151,7 @@ Image Renderer::readFloat4(const cl::Buffer& b, int w, int h, int channels) {
   return img;
 }
 
-Image Renderer::radiance() { return readFloat4(technique_ ? final_ : direct_, width_, height_, 3); }
+Image Renderer::radiance() { return readFloat4(!chain_.empty() ? final_ : direct_, width_, height_, 3); }
 Image Renderer::directRadiance() { return readFloat4(direct_, width_, height_, 3); }
 Image Renderer::indirectRadiance() { return readFloat4(indirect_, width_, height_, 3); }
 

@@ -22,7 +22,7 @@ namespace gi {
 struct RenderSettings {
   int width = 0, height = 0;       // 0 = the scene's default size
   std::string camera;              // name or index; "" = the scene's default camera
-  std::string technique = "direct";
+  std::string technique = "direct";  // a technique or a chain "source+modifier+..." (lpv+ssao)
   std::vector<std::string> sets;   // "name=value" parameter assignments
 };
 
@@ -56,6 +56,9 @@ public:
   const std::vector<ReflectiveShadowMap>& rsms() const { return rsms_; }
   const ShadowMapSet& shadowMaps() const { return shadowMaps_; }
   const DeviceScene& deviceScene() const { return *deviceScene_; }
+  const cl::Buffer& directBuffer() const { return direct_; }
+  // The resources a technique sees in this frame (tests drive single passes with them).
+  FrameResources frameResources(bool upstreamIndirect) const;
 
 private:
   Image readFloat4(const cl::Buffer& b, int w, int h, int channels);
@@ -68,7 +71,7 @@ private:
   GiView cameraView_{};
   std::unique_ptr<DeviceScene> deviceScene_;
   std::unique_ptr<RasterPasses> raster_;
-  std::unique_ptr<Technique> technique_;
+  std::vector<std::unique_ptr<Technique>> chain_;  // empty for "direct"
   GBuffer gbuffer_;
   ShadowMapSet shadowMaps_;
   std::vector<ReflectiveShadowMap> rsms_;
@@ -79,6 +82,10 @@ private:
   bool staticShadows_ = false;  // shadow.static: render the shadow maps once, reuse them
   bool shadowsRendered_ = false;
 };
+
+// Splits a technique chain "a+b+c" and checks it: known names, no repeats, and only the first may
+// be a source (a technique that overwrites the indirect term); throws gi::Error naming the problem.
+std::vector<const TechniqueInfo*> parseTechniqueChain(const std::string& chain);
 
 // Picks a camera by name or index ("" = default); throws gi::Error listing the cameras.
 const Camera& selectCamera(const Scene& scene, const std::string& nameOrIndex);

@@ -1,0 +1,129 @@
+// `ssao`: screen-space ambient occlusion and colour bleeding (kernels/gi/ssao/ssao.cl).
+//
+// Choices where Chapman's tutorial and seed 003 are silent (docs/techniques/ssao.md):
+// - kernel directions from the Halton (2, 3) sequence, uniform over the hemisphere (z = ξ1), not
+//   Chapman's random box samples, so the expected occlusion of a corner is known in closed form;
+// - rotation noise as a 4×4 ordered (Bayer-ranked) tile of 16 evenly spaced angles instead of
+//   random vectors: deterministic, and every 4×4 blur window averages all 16 rotations;
+// - occlusion tested against the tangent plane of the visible surface (exact for planes) instead
+//   of its depth at the pixel centre;
+// - radius 0 = 5 % of the scene's bounding-box diagonal; bias 0 = 1 % of the radius.
+#include "gi/ssao/ssao_technique.h"
+
+#include <cmath>
+#include <memory>
+
+namespace gi {
+
+namespace {
+
+float radicalInverse(uint32_t i, uint32_t base) {
+  float inv = 1.0f / float(base), f = inv, r = 0.0f;
+  while (i > 0) {
+    r += float(i % base) * f;
+    i /= base;
+    f *= inv;
+  }
+  return r;
+}
+
+}  // namespace
+
+std::vector<float> ssaoKernelVectors(int samples) {
+  std::vector<float> v(size_t(samples) * 4);
+  for (int i = 0; i < samples; ++i) {
+    float z = radicalInverse(uint32_t(i) + 1, 2);  // uniform in [0, 1): uniform over the hemisphere
+    float phi = 6.2831853f * radicalInverse(uint32_t(i) + 1, 3);
+    float h = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    float t = float(i) / float(samples);
+    float scale = 0.1f + 0.9f * t * t;  // Chapman's accelerating lerp(0.1, 1, (i/N)²)
+    v[4 * i + 0] = scale * h * std::cos(phi);
+    v[4 * i + 1] = scale * h * std::sin(phi);
+    v[4 * i + 2] = scale * z;
+    v[4 * i + 3] = 0.0f;
+  }
+  return v;
+}
+
+std::vector<float> ssaoRotations() {
+  static const int bayer[16] = {0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5};
+  std::vector<float> r(32);
+  for (int k = 0; k < 16; ++k) {
+    float a = 6.2831853f * float(bayer[k]) / 16.0f;
+    r[2 * k] = std::cos(a);
+    r[2 * k + 1] = std::sin(a);
+  }
+  return r;
+}
+
+SsaoSettings ssaoSettings(const ParamSet& p, const Bounds& bounds, bool upstreamIndirect) {
+  SsaoSettings s;
+  s.samples = p.getInt("ssao.samples");
+  s.radius = p.getFloat("ssao.radius");
+  if (s.radius <= 0.0f) s.radius = 0.05f * glm::length(bounds.extent());
+  s.bias = p.getFloat("ssao.bias");
+  if (s.bias <= 0.0f) s.bias = 0.01f * s.radius;
+  s.blurTau = p.getFloat("ssao.blur_tau");
+  std::string b = p.getChoice("ssao.bleeding");
+  s.bleeding = b == "on" || (b == "auto" && !upstreamIndirect);
+  return s;
+}
+
+void SsaoTechnique::setup(const FrameResources& f) {
+  size_t n = size_t(f.gbuffer.width) * f.gbuffer.height;
+  rawOcclusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao raw occlusion");
+  rawIrradiance_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "ssao raw bleeding irradiance");
+  occlusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao occlusion");
+  rotations_ = f.ctx.upload(ssaoRotations(), "ssao rotations");
+}
+
+void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s) {
+  if (s.samples != programSamples_) {
+    program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)}});
+    occlusionKernel_ = program_.kernel("ssao_occlusion");
+    blurKernel_ = program_.kernel("ssao_blur_compose");
+    kernelVectors_ = f.ctx.upload(ssaoKernelVectors(s.samples), "ssao kernel vectors");
+    programSamples_ = s.samples;
+  }
+  const GBuffer& g = f.gbuffer;
+  occlusionKernel_.args(g.width, g.height, g.view, g.position, g.geoNormal, g.normal, g.visibility.depth, f.direct,
+                        kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), rawOcclusion_,
+                        rawIrradiance_);
+  f.ctx.launch(occlusionKernel_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4),
+               "ssao: occlusion");
+}
+
+void SsaoTechnique::blurComposePass(const FrameResources& f, const SsaoSettings& s, bool upstream,
+                                    cl::Buffer& indirect) {
+  const GBuffer& g = f.gbuffer;
+  blurKernel_.args(g.width, g.height, g.visibility.depth, g.albedo, rawOcclusion_, rawIrradiance_, s.blurTau,
+                   int(upstream), int(s.bleeding), occlusion_, indirect);
+  f.ctx.launch(blurKernel_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4),
+               "ssao: blur + compose");
+}
+
+void SsaoTechnique::render(const FrameResources& f, cl::Buffer& indirect) {
+  SsaoSettings s = ssaoSettings(f.params, f.scene.bounds, f.upstreamIndirect);
+  occlusionPass(f, s);
+  blurComposePass(f, s, f.upstreamIndirect, indirect);
+}
+
+TechniqueInfo ssaoTechniqueInfo() {
+  return {"ssao",
+          "screen-space ambient occlusion (Chapman) on the indirect term of the techniques before it "
+          "(lpv+ssao) and screen-space one-bounce colour bleeding (seed 003 eq. 3.5)",
+          [](ParamSet& p) {
+            p.addInt("ssao.samples", 16, 1, 256, "hemisphere samples per pixel");
+            p.addFloat("ssao.radius", 0.0, 0.0, 1000.0, "hemisphere radius R in metres; 0 = 5 % of the scene diagonal");
+            p.addFloat("ssao.bias", 0.0, 0.0, 1000.0,
+                       "a sample is occluded only this far (metres) behind the visible surface; 0 = 1 % of R");
+            p.addFloat("ssao.blur_tau", 0.05, 0.0, 10.0,
+                       "4x4 blur: neighbours whose view depth differs by more than this fraction are skipped");
+            p.addChoice("ssao.bleeding", "auto", {"auto", "on", "off"},
+                        "screen-space one-bounce colour bleeding (eq. 3.5); auto = on only when ssao is first in "
+                        "the technique chain");
+          },
+          [] { return std::make_unique<SsaoTechnique>(); }};
+}
+
+}  // namespace gi

@@ -1,0 +1,60 @@
+// `ssao`: screen-space ambient occlusion (Chapman 2011; seed 003 §3.5.1) and screen-space
+// one-bounce colour bleeding (seed 003 eq. 3.5). docs/techniques/ssao.md.
+//
+// A modifier of the indirect term (Technique::modifiesIndirect): in a chain such as `lpv+ssao` it
+// multiplies the indirect radiance of the techniques before it by (1 − occlusion), as seed 003
+// applied SSAO to the LPV/VCT indirect term. Alone (`ssao`) there is no indirect term to occlude,
+// and the technique's output is its own one-bounce colour bleeding. `ssao.bleeding=auto` turns
+// the bleeding on only when ssao is first in the chain (after a technique that already computes
+// the first bounce it would count it twice).
+#pragma once
+#include <vector>
+
+#include "gi/technique.h"
+
+namespace gi {
+
+TechniqueInfo ssaoTechniqueInfo();
+
+struct SsaoSettings {
+  int samples = 16;
+  float radius = 0.0f;  // metres
+  float bias = 0.0f;    // metres
+  float blurTau = 0.05f;
+  bool bleeding = false;
+};
+
+// The hemisphere kernel: `samples` tangent-space vectors (x, y, z along the normal, w = 0) with
+// directions uniform over the hemisphere (Halton 2, 3) and lengths lerp(0.1, 1, (i/N)²).
+std::vector<float> ssaoKernelVectors(int samples);
+// The 4×4 rotation tile: 16 (cos, sin) pairs, angle 2π·rank/16 with the rank of a 4×4 Bayer matrix.
+std::vector<float> ssaoRotations();
+// Reads the ssao.* parameters; radius and bias 0 = automatic from the scene bounds.
+SsaoSettings ssaoSettings(const ParamSet& params, const Bounds& sceneBounds, bool upstreamIndirect);
+
+class SsaoTechnique : public Technique {
+public:
+  std::string name() const override { return "ssao"; }
+  bool modifiesIndirect() const override { return true; }
+  void setup(const FrameResources& frame) override;
+  void render(const FrameResources& frame, cl::Buffer& indirect) override;
+
+  // The two passes, separately (tests): raw per-pixel occlusion and irradiance E from the
+  // G-buffer, then the depth-aware blur and the composition into `indirect`.
+  void occlusionPass(const FrameResources& frame, const SsaoSettings& s);
+  void blurComposePass(const FrameResources& frame, const SsaoSettings& s, bool upstreamIndirect,
+                       cl::Buffer& indirect);
+
+  // float per pixel (occluded fraction), float4 per pixel (irradiance E, W/m²); blurred occlusion.
+  cl::Buffer& rawOcclusion() { return rawOcclusion_; }
+  cl::Buffer& rawIrradiance() { return rawIrradiance_; }
+  const cl::Buffer& occlusion() const { return occlusion_; }
+
+private:
+  cl::Program program_;
+  cl::Kernel occlusionKernel_, blurKernel_;
+  cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_;
+  int programSamples_ = 0;
+};
+
+}  // namespace gi
