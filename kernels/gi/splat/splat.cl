@@ -1,5 +1,6 @@
 // Splatting indirect illumination (Dachsbacher & Stamminger 2006) in compute form, as tiled
-// light culling (ALGORITHMS.md §2.4). No visibility.
+// light culling (ALGORITHMS.md §2.4). No visibility unless compiled with GI_VPL_VISIBILITY
+// (one shadow ray per pixel–VPL pair, kernels/gi/vpl/vpl_visibility.h).
 //
 // A VPL's influence radius r is where E_p falls below ε × its value at d_min for the brightest
 // receiver orientation: Φ/(π d²) < ε·Φ/(π d_min²)  ⇔  d² > d_min²/ε. Pairs farther apart are cut;
@@ -13,6 +14,7 @@
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/vector_width.h"
+#include "gi/vpl/vpl_visibility.h"
 
 #define SPLAT_TILE 16
 
@@ -89,7 +91,8 @@ kernel void splat_bin(global const int4* rects, int count, int tilesX, int tiles
 kernel void splat_shade(int width, int height, int tilesX, global const float* gPosition, global const float* gNormal,
                         global const float4* albedo, global const float4* vpls, int count, float epsilon,
                         global const int* lists, global const int* counts, int n, int m, int ordering,
-                        global float4* out) {
+                        global float4* out GI_VPL_VISIBILITY_PARAMS) {
+  GI_VPL_VISIBILITY_BEGIN
   int gx = get_global_id(0), y = get_global_id(1);
   int x0 = gx * GI_VW;
   if (x0 >= width || y >= height) return;
@@ -126,6 +129,9 @@ kernel void splat_shade(int width, int height, int tilesX, global const float* g
       g = select((floatV)(0.0f), g, cls == set);
 #endif
     }
+#ifdef GI_VPL_VISIBILITY
+    g = GI_VPL_VISIBLE(px, py, pz, a.xyz, GI_SEL((floatV)(0.0f), g, pw > 0.0f));  // no rays for background lanes
+#endif
     er += f.x * g;
     eg += f.y * g;
     eb += f.z * g;

@@ -1,8 +1,9 @@
-// All-pairs VPL gathering with interleaved sampling (ALGORITHMS.md §2, §2.3). No visibility:
-// every VPL lights every receiver it faces (an over-estimate in occluded regions).
+// All-pairs VPL gathering with interleaved sampling (ALGORITHMS.md §2, §2.3). Without visibility
+// (the default) every VPL lights every receiver it faces (an over-estimate in occluded regions);
+// compiled with GI_VPL_VISIBILITY each pair is tested by a shadow ray (vpl_visibility.h).
 //
 //   gi_deinterleave   camera pixel (x, y) -> packed slot of sub-image c = (x mod n) + n·(y mod m)
-//                     at (x / n, y / m): position and shading normal as six float planes (SoA).
+//                     at (x / n, y / m): position and normal (shading, or geometric for sh-igi) as six float planes (SoA).
 //                     Sub-images are ⌈W/n⌉×⌈H/m⌉, each padded to a multiple of GI_VW slots; slots
 //                     without a pixel keep the zero normal they were cleared with (E = 0).
 //                     Pattern 1×1 is the plain row-major copy used by the `vpl` technique.
@@ -16,6 +17,7 @@
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/vector_width.h"
+#include "gi/vpl/vpl_visibility.h"
 
 inline size_t gi_packed_index(int x, int y, int n, int m, int subWidth, int stride) {
   int c = (x % n) + n * (y % m);
@@ -40,7 +42,8 @@ kernel void gi_deinterleave(int width, int height, int n, int m, int subWidth, i
 }
 
 kernel void vpl_gather(global const float* planes, int sets, int stride, global const float4* vpls, int count,
-                       global float* irradiance) {
+                       global float* irradiance GI_VPL_VISIBILITY_PARAMS) {
+  GI_VPL_VISIBILITY_BEGIN
   size_t g = get_global_id(0);
   size_t L = (size_t)sets * stride;
   if (g * GI_VW >= L) return;
@@ -55,6 +58,7 @@ kernel void vpl_gather(global const float* planes, int sets, int stride, global 
     floatV cp = -(b.x * vx + b.y * vy + b.z * vz);  // n_p·(x − x_p)
     floatV cr = nx * vx + ny * vy + nz * vz;        // −n·(x − x_p)
     floatV gterm = max(cp, 0.0f) * max(cr, 0.0f) / (max(d2, 1e-20f) * max(d2, a.w));
+    gterm = GI_VPL_VISIBLE(px, py, pz, a.xyz, gterm);
     er += f.x * gterm;
     eg += f.y * gterm;
     eb += f.z * gterm;

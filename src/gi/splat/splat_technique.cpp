@@ -5,6 +5,7 @@
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/splat/splat_technique.h"
 #include "gi/vpl/vpl_lights.h"
+#include "gi/vpl/vpl_visibility.h"
 
 namespace gi {
 
@@ -53,11 +54,19 @@ public:
     size_t bytes = size_t(g.width) * g.height * 16;
     if (interleaved && (!irradiance_ || irradiance_.bytes() != bytes))
       irradiance_ = cl::Buffer(f.ctx, bytes, CL_MEM_READ_WRITE, "splat irradiance");
-    shade_.args(g.width, g.height, tilesX, g.position, g.normal, g.albedo, vpls_.vpls, vpls_.count, eps, lists_,
-                counts_, n, m, ordering, interleaved ? irradiance_ : indirect);
+    visibility_.update(f);
+    if (visibility_.enabled() && !visibleShade_.get()) {
+      visibleProgram_ = f.ctx.buildProgram("kernels/gi/splat/splat.cl", visibility_.defines());
+      visibleShade_ = visibleProgram_.kernel("splat_shade");
+    }
+    cl::Kernel& shade = visibility_.enabled() ? visibleShade_ : shade_;
+    shade.args(g.width, g.height, tilesX, g.position, g.normal, g.albedo, vpls_.vpls, vpls_.count, eps, lists_,
+               counts_, n, m, ordering, interleaved ? irradiance_ : indirect);
+    visibility_.setArgs(shade, 15);
     size_t gx = size_t(tilesX) * kTile / vw;
     size_t lx = vw == 1 ? 16 : 1;
-    f.ctx.launch(shade_, cl::NDRange::d2(gx, size_t(tilesY) * kTile, lx, 16), "splat: shade");
+    f.ctx.launch(shade, cl::NDRange::d2(gx, size_t(tilesY) * kTile, lx, 16),
+                 visibility_.enabled() ? "splat: shade + rays" : "splat: shade");
     if (interleaved) {
       GeometryTest t;
       t.tauZ = p.getFloat("splat.tau_z");
@@ -70,6 +79,9 @@ private:
   std::unique_ptr<VplGenerator> generator_;
   cl::Program program_;
   cl::Kernel bounds_, bin_, shade_;
+  cl::Program visibleProgram_;  // splat_shade with visibility rays, built when first asked for
+  cl::Kernel visibleShade_;
+  VplVisibility visibility_;
   cl::Buffer rects_, lists_, counts_, irradiance_;
   std::unique_ptr<DiscontinuityFilter> filter_;
   VplSet vpls_;
@@ -79,7 +91,7 @@ private:
 }  // namespace
 
 TechniqueInfo splatTechniqueInfo() {
-  return {"splat", "splatting indirect illumination as tiled VPL culling (influence radius d_min/sqrt(eps)), no visibility",
+  return {"splat", "splatting indirect illumination as tiled VPL culling (influence radius d_min/sqrt(eps)), visibility per vpl.visibility",
           [](ParamSet& p) {
             p.addInt("splat.count", 256, 1, 4096, "VPLs per light");
             p.addFloat("splat.epsilon", 1.0 / 256.0, 1e-12, 1.0,

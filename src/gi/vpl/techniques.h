@@ -3,6 +3,6 @@
 #include "gi/technique.h"
 
 namespace gi {
-TechniqueInfo vplTechniqueInfo();  // all-pairs VPL gather, no visibility
-TechniqueInfo igiTechniqueInfo();  // interleaved VPL gather + discontinuity filter, no visibility
+TechniqueInfo vplTechniqueInfo();  // all-pairs VPL gather
+TechniqueInfo igiTechniqueInfo();  // interleaved VPL gather + discontinuity filter
 }  // namespace gi

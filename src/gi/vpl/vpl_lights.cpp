@@ -143,18 +143,26 @@ void InterleavedGather::resize(int width, int height, int n, int m) {
   ctx_.fill(irradiance_, 0.0f);
 }
 
-void InterleavedGather::deinterleave(const GBuffer& g) {
-  deinterleave_.args(width_, height_, n_, m_, subW_, stride_, g.position, g.normal, planes_);
+void InterleavedGather::deinterleave(const GBuffer& g, bool geometricNormal) {
+  deinterleave_.args(width_, height_, n_, m_, subW_, stride_, g.position, geometricNormal ? g.geoNormal : g.normal,
+                     planes_);
   ctx_.launch(deinterleave_, cl::NDRange::d2(cl::roundUp(width_, 16), cl::roundUp(height_, 16), 16, 16),
               prefix_ + ": de-interleave");
 }
 
-void InterleavedGather::shade(const VplSet& v) {
+void InterleavedGather::shade(const VplSet& v, const VplVisibility* visibility) {
   int sets = n_ * m_;
-  gather_.args(planes_, sets, stride_, v.vpls, v.count, irradiance_);
+  bool rays = visibility && visibility->enabled();
+  if (rays && !visibleGather_.get()) {
+    visibleProgram_ = ctx_.buildProgram("kernels/gi/vpl/vpl_gather.cl", visibility->defines());
+    visibleGather_ = visibleProgram_.kernel("vpl_gather");
+  }
+  cl::Kernel& gather = rays ? visibleGather_ : gather_;
+  gather.args(planes_, sets, stride_, v.vpls, v.count, irradiance_);
+  if (rays) visibility->setArgs(gather, 6);
   size_t items = slots() / size_t(ctx_.vectorWidth());
   size_t local = ctx_.vectorWidth() > 1 ? 4 : 64;
-  ctx_.launch(gather_, cl::NDRange::d1(cl::roundUp(items, local), local), prefix_ + ": shade");
+  ctx_.launch(gather, cl::NDRange::d1(cl::roundUp(items, local), local), prefix_ + (rays ? ": shade + rays" : ": shade"));
 }
 
 void InterleavedGather::reinterleaveRadiance(const GBuffer& g, cl::Buffer& out) {

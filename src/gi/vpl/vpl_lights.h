@@ -9,6 +9,7 @@
 
 #include "cl/runtime.h"
 #include "raster/gbuffer.h"
+#include "gi/vpl/vpl_visibility.h"
 
 namespace gi {
 
@@ -58,8 +59,11 @@ public:
   // `prefix` names the launches: "<prefix>: de-interleave", "<prefix>: shade", "<prefix>: re-interleave".
   InterleavedGather(cl::Context& ctx, std::string prefix);
   void resize(int width, int height, int n, int m);
-  void deinterleave(const GBuffer& g);
-  void shade(const VplSet& vpls);
+  // Normals: the shading normal (irradiance at the receiver, vpl/igi), or the geometric normal
+  // (sh-igi, whose receivers' hemisphere test must not see the normal map).
+  void deinterleave(const GBuffer& g, bool geometricNormal = false);
+  // `visibility` enabled: every pair is tested by a shadow ray (the visibility variant of the gather).
+  void shade(const VplSet& vpls, const VplVisibility* visibility = nullptr);
   void reinterleaveRadiance(const GBuffer& g, cl::Buffer& out);  // L = ρ/π · E
   void reinterleaveIrradiance(cl::Buffer& out);                    // E, float4 per pixel
 
@@ -77,6 +81,8 @@ private:
   std::string prefix_;
   cl::Program program_;
   cl::Kernel deinterleave_, gather_, reRadiance_, reIrradiance_;
+  cl::Program visibleProgram_;  // built on the first shade() with visibility
+  cl::Kernel visibleGather_;
   cl::Buffer planes_, irradiance_;
   int width_ = 0, height_ = 0, n_ = 0, m_ = 0, subW_ = 0, subH_ = 0, stride_ = 0;
 };

@@ -1,5 +1,6 @@
-// `vpl`: all-pairs VPL gathering without visibility (docs/techniques/vpl.md).
+// `vpl`: all-pairs VPL gathering (docs/techniques/vpl.md).
 // `igi`: the same gather with interleaved sampling + discontinuity filter (docs/techniques/igi.md).
+// Both without visibility unless `vpl.visibility=rays` (gi/vpl/vpl_visibility.h).
 #include <memory>
 
 #include "gi/filters/discontinuity_filter.h"
@@ -21,14 +22,16 @@ public:
   void render(const FrameResources& f, cl::Buffer& indirect) override {
     generator_->generate(f.rsms, f.params.getInt("vpl.count"), f.params.getFloat("vpl.d_min"), vpls_);
     gather_->resize(f.gbuffer.width, f.gbuffer.height, 1, 1);
+    visibility_.update(f);
     gather_->deinterleave(f.gbuffer);
-    gather_->shade(vpls_);
+    gather_->shade(vpls_, &visibility_);
     gather_->reinterleaveRadiance(f.gbuffer, indirect);
   }
 
 private:
   std::unique_ptr<VplGenerator> generator_;
   std::unique_ptr<InterleavedGather> gather_;
+  VplVisibility visibility_;
   VplSet vpls_;
 };
 
@@ -55,8 +58,9 @@ public:
     size_t bytes = size_t(f.gbuffer.width) * f.gbuffer.height * 16;
     if (!irradiance_ || irradiance_.bytes() != bytes)
       irradiance_ = cl::Buffer(f.ctx, bytes, CL_MEM_READ_WRITE, "igi irradiance");
+    visibility_.update(f);
     gather_->deinterleave(f.gbuffer);
-    gather_->shade(vpls_);
+    gather_->shade(vpls_, &visibility_);
     gather_->reinterleaveIrradiance(irradiance_);
     GeometryTest t;
     t.tauZ = p.getFloat("igi.tau_z");
@@ -69,6 +73,7 @@ private:
   std::unique_ptr<VplGenerator> generator_;
   std::unique_ptr<InterleavedGather> gather_;
   std::unique_ptr<DiscontinuityFilter> filter_;
+  VplVisibility visibility_;
   VplSet vpls_;
   cl::Buffer irradiance_;
 };
@@ -76,8 +81,9 @@ private:
 }  // namespace
 
 TechniqueInfo vplTechniqueInfo() {
-  return {"vpl", "all-pairs VPL gathering from flux-sampled RSM texels, no visibility (instant radiosity)",
+  return {"vpl", "all-pairs VPL gathering from flux-sampled RSM texels, visibility per vpl.visibility (instant radiosity)",
           [](ParamSet& p) {
+            declareVplVisibilityParams(p);
             p.addInt("vpl.count", 256, 1, 4096, "VPLs per light (Halton-stratified, flux-importance-sampled)");
             p.addFloat("vpl.d_min", 0.0, 0.0, 100.0,
                        "distance clamp of the 1/d² term in metres; 0 = 0.5 x the RSM texel footprint at each VPL");
@@ -86,7 +92,7 @@ TechniqueInfo vplTechniqueInfo() {
 }
 
 TechniqueInfo igiTechniqueInfo() {
-  return {"igi", "interleaved VPL gathering (n x m VPL sets on de-interleaved sub-images) + discontinuity filter, no visibility",
+  return {"igi", "interleaved VPL gathering (n x m VPL sets on de-interleaved sub-images) + discontinuity filter, visibility per vpl.visibility",
           [](ParamSet& p) {
             p.addInt("igi.count", 256, 1, 4096, "VPLs per light, split into n*m sets (VPL k -> set k mod n*m)");
             p.addFloat("igi.d_min", 0.0, 0.0, 100.0, "distance clamp in metres; 0 = 0.5 x RSM texel footprint");
