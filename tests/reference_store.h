@@ -3,7 +3,7 @@
 // Why: an accuracy test compares a technique with the reference path tracer. A reference rendered
 // inside the test at CI-affordable sample counts (≈1k spp at 128×128) is noisy enough to cost
 // SSIM several hundredths by itself, which hides the technique's own error. So each accuracy test
-// names its reference by a key; the converged image (≥ 16k spp) lives in the repository and is
+// names its reference by a key; the converged image (2k–16k spp, printed when written) lives in the repository and is
 // re-validated on every run against a fresh, independent-seed render of the *current* path tracer
 // and scene (block means must agree within their standard errors). A stale file — the scene, the
 // camera, the light or the path tracer changed — fails the test with the command that regenerates
