@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "render/renderer.h"
+#include "scene/cornell_box.h"
+#include "scene/scene_loader.h"
 
 namespace gi::timing {
 
@@ -19,6 +21,42 @@ inline double median(std::vector<double> v) {
 struct FrameSettings {
   int frames = 9, warmup = 2, width = 640, height = 360;
 };
+
+// The common command line of the technique benchmarks:
+//   [--scene S] [--width W --height H] [--frames N] [--quick]
+struct BenchArgs {
+  FrameSettings frames;
+  std::string scenePath = "scenes/sponza.json";
+  bool quick = false;
+};
+
+// False (with the usage printed) on an unknown argument.
+inline bool parseBenchArgs(int argc, char** argv, const char* program, BenchArgs& a) {
+  for (int i = 1; i < argc; ++i) {
+    std::string k = argv[i];
+    auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
+    if (k == "--scene") a.scenePath = next();
+    else if (k == "--width") a.frames.width = std::stoi(next());
+    else if (k == "--height") a.frames.height = std::stoi(next());
+    else if (k == "--frames") a.frames.frames = std::stoi(next());
+    else if (k == "--quick") a.quick = true;
+    else {
+      std::fprintf(stderr, "usage: %s [--scene S] [--width W --height H] [--frames N] [--quick]\n", program);
+      return false;
+    }
+  }
+  return true;
+}
+
+// The benchmark's scene, or the built-in Cornell box (with a note) when it does not load.
+inline Scene loadBenchScene(const std::string& path) {
+  try {
+    return loadScene(path, "");
+  } catch (const std::exception& e) {
+    std::printf("(%s not loadable: %s; using the built-in Cornell box)\n", path.c_str(), e.what());
+    return makeCornellBox();
+  }
+}
 
 // Renders warm-up frames, then `frames` timed ones; prints the technique's kernels (not the shared
 // raster passes) and a total; returns every pass's median by name, plus "__total".

@@ -10,39 +10,19 @@
 #include <vector>
 
 #include "gi/vct/voxel_scene.h"
-#include "scene/cornell_box.h"
-#include "scene/scene_loader.h"
 #include "technique_timing.h"
 
 using namespace gi;
 
 int main(int argc, char** argv) {
-  timing::FrameSettings a;
-  a.frames = 5;
-  std::string scenePath = "scenes/sponza.json";
-  bool quick = false;
-  for (int i = 1; i < argc; ++i) {
-    std::string k = argv[i];
-    auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
-    if (k == "--scene") scenePath = next();
-    else if (k == "--width") a.width = std::stoi(next());
-    else if (k == "--height") a.height = std::stoi(next());
-    else if (k == "--frames") a.frames = std::stoi(next());
-    else if (k == "--quick") quick = true;
-    else {
-      std::fprintf(stderr, "usage: vct_bench [--scene S] [--width W --height H] [--frames N] [--quick]\n");
-      return 2;
-    }
-  }
+  timing::BenchArgs args;
+  args.frames.frames = 5;
+  if (!timing::parseBenchArgs(argc, argv, "vct_bench", args)) return 2;
+  const timing::FrameSettings& a = args.frames;
+  bool quick = args.quick;
   try {
     cl::Context ctx(cl::selectDevice(""));
-    Scene scene;
-    try {
-      scene = loadScene(scenePath, "");
-    } catch (const std::exception& e) {
-      std::printf("(%s not loadable: %s; using the built-in Cornell box)\n", scenePath.c_str(), e.what());
-      scene = makeCornellBox();
-    }
+    Scene scene = timing::loadBenchScene(args.scenePath);
     std::printf("vct bench: %s (%zu triangles), %dx%d, %s, median of %d frames after %d warm-up\n", scene.name.c_str(),
                 scene.triangleCount(), a.width, a.height, ctx.device().name.c_str(), a.frames, a.warmup);
     std::printf("targets (issue 7, Sponza 640x360): voxelize 128^3 <= 60 ms, inject <= 5 ms, mips <= 3 ms "

@@ -6,6 +6,7 @@
 #include "gi/lpv/lpv_technique.h"
 #include "gi/vct/vct_technique.h"
 #include "gi/ssao/ssao_technique.h"
+#include "gi/probes/probes_technique.h"
 
 namespace gi {
 
@@ -18,6 +19,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       lpvTechniqueInfo(),
       vctTechniqueInfo(),
       ssaoTechniqueInfo(),
+      probesTechniqueInfo(),
   };
   return registry;
 }

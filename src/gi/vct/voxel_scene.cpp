@@ -1,9 +1,8 @@
 #include "gi/vct/voxel_scene.h"
 
 #include <algorithm>
-#include <set>
 
-#include "scene/lights.h"
+#include "gi/emitter_flags.h"
 #include "util/error.h"
 
 namespace gi {
@@ -14,25 +13,6 @@ int log2Exact(int n) {
   int l = 0;
   while ((1 << l) < n) ++l;
   return l;
-}
-
-// Per instance: 1 when its emission belongs in the voxels. Emitters that have a spot/point
-// stand-in (lights.h) already light the scene through that light in the direct pass and in the
-// injected direct irradiance; putting their emission into the voxels as well would let the cones
-// gather the same light a second time.
-std::vector<uint32_t> instanceEmissionFlags(const Scene& scene) {
-  std::set<std::string> standIns;
-  for (const std::string& n : scene.lightNames)
-    if (n.rfind(kEmitterLightPrefix, 0) == 0) standIns.insert(n.substr(std::string(kEmitterLightPrefix).size()));
-  uint32_t instances = 1;
-  for (uint32_t i : scene.triangleInstance) instances = std::max(instances, i + 1);
-  std::vector<uint32_t> flags(instances, 1);
-  for (uint32_t i = 0; i < instances; ++i) {
-    std::string name = i < scene.instanceNames.size() && !scene.instanceNames[i].empty() ? scene.instanceNames[i]
-                                                                                         : "instance" + std::to_string(i);
-    if (standIns.count(name)) flags[i] = 0;
-  }
-  return flags;
 }
 
 }  // namespace

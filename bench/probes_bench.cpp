@@ -1,0 +1,59 @@
+// Light-field probes benchmark (issue 8): per-kernel device milliseconds (medians over frames after
+// warm-up) of `probes` on Sponza 640×360 with its sun when the media are present (else the
+// built-in Cornell box), and the device memory of the probe field. Not a test: the machine is
+// noisy; docs/PERFORMANCE.md records the numbers.
+//
+//   build/probes_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 5] [--quick]
+// Targets: shading from the probes <= 5 ms; updating 256 probes x 64 rays <= 100 ms (trace + blends
+// + borders).
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "gi/probes/probes_technique.h"
+#include "technique_timing.h"
+
+using namespace gi;
+
+int main(int argc, char** argv) {
+  timing::BenchArgs args;
+  args.frames.frames = 5;
+  if (!timing::parseBenchArgs(argc, argv, "probes_bench", args)) return 2;
+  const timing::FrameSettings& a = args.frames;
+  try {
+    cl::Context ctx(cl::selectDevice(""));
+    Scene scene = timing::loadBenchScene(args.scenePath);
+    std::printf("probes bench: %s (%zu triangles), %dx%d, %s, median of %d frames after %d warm-up\n",
+                scene.name.c_str(), scene.triangleCount(), a.width, a.height, ctx.device().name.c_str(), a.frames,
+                a.warmup);
+    std::printf("targets (issue 8, Sponza 640x360): shading <= 5 ms; update of 256 probes x 64 rays <= 100 ms\n");
+    {
+      DeviceScene ds(ctx, scene);
+      ProbeSettings s;
+      ProbeField field(ctx, scene, ds, s);
+      const GiProbeGrid& g = field.grid();
+      std::printf("probe grid %dx%dx%d = %d probes, spacing %.2f x %.2f x %.2f m; memory: maps %.2f MB "
+                  "(irradiance %dx%d + border, distance %dx%d + border), rays %.2f MB, BVH %.1f MB\n",
+                  g.count[0], g.count[1], g.count[2], field.probeCount(), g.spacing[0], g.spacing[1], g.spacing[2],
+                  field.mapBytes() / 1e6, g.irradiance_res, g.irradiance_res, g.distance_res, g.distance_res,
+                  field.rayBytes() / 1e6, field.bvhBytes() / 1e6);
+    }
+    struct Config {
+      std::vector<std::string> sets;
+      std::string title;
+    };
+    std::vector<Config> configs = {
+        {{}, "dynamic: 256 probes x 64 rays updated every frame + shading"},
+        {{"probes.update=static", "probes.rebuild_updates=4"}, "static: shading only (rebuilt in the warm-up)"},
+    };
+    if (!args.quick) {
+      configs.push_back({{"probes.rays=256"}, "dynamic, 256 rays per probe"});
+      configs.push_back({{"probes.multibounce=0"}, "dynamic, no multi-bounce"});
+    }
+    for (const Config& c : configs) timing::timeTechnique(ctx, scene, a, "probes", c.sets, c.title);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,118 @@
+// Reading a light-field probe grid (McGuire et al. 2017, "Real-time global illumination using
+// precomputed light field probes", as seed 004 §4 implemented its "irradiance with filtered
+// visibility"; ALGORITHMS.md §6): octahedral mapping, bilinear map lookups, and the irradiance at
+// a surface point blended from its 8 surrounding probes with
+//   - trilinear weights over the probe cell,
+//   - the backface term of seed 004 eq. 7, max(0, n · (p_probe − x)/|p_probe − x|), but at least
+//     grid.backface_floor (else a point facing away from all 8 probes, e.g. a wall between the
+//     outermost probes and the bounds, would get no light at all),
+//   - Chebyshev visibility from the probe's filtered distance (mean μ, mean² of the distance):
+//     with r the distance from the probe to the (biased) point, r ≤ μ is visible, else
+//     σ² / (σ² + (r − μ)²), σ² = |mean² − μ²|, raised to grid.chebyshev_power (DDGI's sharpening);
+// and the weights renormalised. Layout of the maps: probe_types.h.
+#pragma once
+#include "common/math.h"
+#include "gi/probes/probe_types.h"
+
+inline float probe_sign_not_zero(float v) { return v >= 0.0f ? 1.0f : -1.0f; }
+
+// Seed 004 Algorithm 1: unit direction -> octahedral coordinates in [-1, 1]².
+inline float2 probe_oct_encode(float3 v) {
+  float l1 = fabs(v.x) + fabs(v.y) + fabs(v.z);
+  float2 p = (float2)(v.x, v.y) / l1;
+  if (v.z < 0.0f)
+    p = (float2)((1.0f - fabs(p.y)) * probe_sign_not_zero(p.x), (1.0f - fabs(p.x)) * probe_sign_not_zero(p.y));
+  return p;
+}
+
+// Seed 004 Algorithm 2: octahedral coordinates -> unit direction.
+inline float3 probe_oct_decode(float2 o) {
+  float3 v = (float3)(o.x, o.y, 1.0f - fabs(o.x) - fabs(o.y));
+  if (v.z < 0.0f) {
+    float x = (1.0f - fabs(v.y)) * probe_sign_not_zero(v.x);
+    float y = (1.0f - fabs(v.x)) * probe_sign_not_zero(v.y);
+    v.x = x;
+    v.y = y;
+  }
+  return normalize(v);
+}
+
+// Direction of the centre of interior texel (tx, ty), 0 <= tx, ty < res.
+inline float3 probe_texel_direction(int tx, int ty, int res) {
+  return probe_oct_decode((float2)(((float)tx + 0.5f) / (float)res * 2.0f - 1.0f,
+                                   ((float)ty + 0.5f) / (float)res * 2.0f - 1.0f));
+}
+
+// Bilinear footprint of direction `dir` in a bordered map with `res` interior texels per side:
+// the top-left tap (x0, y0) (both in 0 … res, so x0 + 1 <= res + 1 stays inside) and weights.
+inline void probe_bilinear(float3 dir, int res, int* x0, int* y0, float2* t) {
+  float2 f = (probe_oct_encode(dir) * 0.5f + 0.5f) * (float)res + 0.5f;
+  float2 fl = floor(f);
+  *x0 = clamp((int)fl.x, 0, res);
+  *y0 = clamp((int)fl.y, 0, res);
+  *t = clamp(f - (float2)((float)*x0, (float)*y0), 0.0f, 1.0f);
+}
+
+inline float3 probe_sample_irradiance(global const float4* irradiance, int probe, int res, float3 dir) {
+  int x0, y0;
+  float2 t;
+  probe_bilinear(dir, res, &x0, &y0, &t);
+  int side = res + 2;
+  global const float4* m = irradiance + (size_t)probe * side * side + y0 * side + x0;
+  float3 top = mix(m[0].xyz, m[1].xyz, t.x), bottom = mix(m[side].xyz, m[side + 1].xyz, t.x);
+  return mix(top, bottom, t.y);
+}
+
+inline float2 probe_sample_distance(global const float2* distance, int probe, int res, float3 dir) {
+  int x0, y0;
+  float2 t;
+  probe_bilinear(dir, res, &x0, &y0, &t);
+  int side = res + 2;
+  global const float2* m = distance + (size_t)probe * side * side + y0 * side + x0;
+  float2 top = mix(m[0], m[1], t.x), bottom = mix(m[side], m[side + 1], t.x);
+  return mix(top, bottom, t.y);
+}
+
+inline float3 probe_position(const GiProbeGrid* g, int3 i) {
+  return vload3(0, g->origin) + convert_float3(i) * vload3(0, g->spacing);
+}
+
+// Irradiance E (W/m²) at surface point x with shading normal n, geometric normal ng and unit
+// direction wo towards the viewer (the camera, or a probe ray's origin).
+inline float3 probe_field_irradiance(const GiProbeGrid* g, global const float4* irradiance,
+                                     global const float2* distance, float3 x, float3 n, float3 ng, float3 wo) {
+  int3 count = vload3(0, g->count);
+  float3 spacing = vload3(0, g->spacing);
+  // Self-shadowing bias (DDGI): the visibility test looks from a point moved off the surface.
+  float3 xb = x + ng * g->normal_bias + wo * g->view_bias;
+  float3 rel = (xb - vload3(0, g->origin)) / spacing;
+  int3 base = clamp(convert_int3(floor(rel)), (int3)(0), max(count - 2, (int3)(0)));
+  float3 alpha = clamp(rel - convert_float3(base), 0.0f, 1.0f);
+  float3 sum = (float3)(0.0f);
+  float wsum = 0.0f;
+  for (int c = 0; c < 8; ++c) {
+    int3 off = (int3)(c & 1, (c >> 1) & 1, c >> 2);
+    float3 tri = select(1.0f - alpha, alpha, off != 0);
+    float w = tri.x * tri.y * tri.z;
+    if (w <= 0.0f) continue;
+    int3 pi = min(base + off, count - 1);  // a one-probe axis uses probe 0 for both corners
+    int probe = (pi.z * count.y + pi.y) * count.x + pi.x;
+    float3 pp = probe_position(g, pi);
+    float3 toProbe = pp - x;
+    float len = length(toProbe);
+    if (len > 0.0f) w *= fmax(g->backface_floor, dot(n, toProbe / len));  // seed 004 eq. 7
+    float3 fromProbe = xb - pp;
+    float r = length(fromProbe);
+    float2 m = probe_sample_distance(distance, probe, g->distance_res, r > 0.0f ? fromProbe / r : n);
+    if (r > m.x) {
+      float variance = fabs(m.y - m.x * m.x), d = r - m.x;
+      float cheb = variance / (variance + d * d), v = 1.0f;
+      for (int k = 0; k < g->chebyshev_power; ++k) v *= cheb;
+      w *= v;
+    }
+    if (w <= 0.0f) continue;
+    sum += w * probe_sample_irradiance(irradiance, probe, g->irradiance_res, n);
+    wsum += w;
+  }
+  return wsum > 0.0f ? sum / wsum : (float3)(0.0f);
+}

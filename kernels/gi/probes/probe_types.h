@@ -1,0 +1,40 @@
+// The light-field probe grid (McGuire et al. 2017 as seed 004 §4 used it; ALGORITHMS.md §6),
+// shared by the host (src/gi/probes/) and the kernels (kernels/gi/probes/). Same layout rules as
+// common/shared_types.h.
+//
+// Probe (i, j, k), 0 <= i < count[0] …, sits at origin + (i, j, k) · spacing. Each probe owns two
+// octahedral maps (probe_field.h), each with a one-texel border that repeats the texels across
+// the octahedral seams so that bilinear filtering needs no wrap logic:
+//   irradiance: (irradiance_res + 2)² float4 texels, rgb = irradiance E (W/m²) on a surface at the
+//               probe facing the texel's direction, from the light reflected by the scene;
+//   distance:   (distance_res + 2)² float2 texels, (mean, mean²) of the distance (metres) to the
+//               first surface around the texel's direction (the filtered distance of the paper).
+// Probe p's irradiance texel (x, y) is irradiance[p · (irradiance_res + 2)² + y · (irradiance_res + 2) + x];
+// interior texels are 1 … res, texel x covers octahedral coordinates [(x − 1)/res, x/res]·2 − 1.
+#pragma once
+
+#include "../../common/shared_types.h"
+
+#ifndef __OPENCL_VERSION__
+namespace gi {
+#endif
+
+typedef struct {
+  float origin[3];           // world position of probe (0, 0, 0)
+  float max_distance;        // ray length (metres); a ray that hits nothing records this distance
+  float spacing[3];          // metres between neighbouring probes along x, y, z
+  float normal_bias;         // shading point moved this far (metres) along its geometric normal ...
+  GI_I32 count[3];           // probes along x, y, z
+  float view_bias;           // ... and this far towards the viewer before the visibility test
+  GI_I32 irradiance_res;     // interior texels per side of an irradiance map
+  GI_I32 distance_res;       // interior texels per side of a distance map
+  GI_I32 rays;               // rays per probe per update
+  GI_I32 chebyshev_power;    // the Chebyshev bound is raised to this power (sharper shadows)
+  float backface_floor;      // smallest backface weight (a point facing away from every probe still blends)
+  float pad[3];
+} GiProbeGrid;  // 80 bytes
+
+#ifndef __OPENCL_VERSION__
+}  // namespace gi
+static_assert(sizeof(gi::GiProbeGrid) == 80, "GiProbeGrid layout");
+#endif

@@ -1,0 +1,178 @@
+// Host side of the probe grid (kernels/gi/probes/probes.cl documents what each kernel computes).
+#include "gi/probes/probe_field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "gi/emitter_flags.h"
+#include "util/error.h"
+
+namespace gi {
+
+glm::ivec3 autoProbeCounts(const Bounds& bounds) {
+  glm::vec3 e = bounds.valid() ? bounds.extent() : glm::vec3(1.0f);
+  int shortest = 0;
+  for (int a = 1; a < 3; ++a)
+    if (e[a] < e[shortest]) shortest = a;
+  glm::ivec3 c(8);
+  c[shortest] = 4;
+  return c;
+}
+
+GiProbeGrid fitProbeGrid(const Bounds& bounds, const ProbeSettings& s) {
+  glm::ivec3 counts = s.counts;
+  glm::ivec3 automatic = autoProbeCounts(bounds);
+  const char* axis[3] = {"probes.grid_x", "probes.grid_y", "probes.grid_z"};
+  for (int a = 0; a < 3; ++a) {
+    if (counts[a] == 0) counts[a] = automatic[a];
+    if (counts[a] < 1 || counts[a] > 64)
+      throw Error(std::string(axis[a]) + " = " + std::to_string(counts[a]) + ": probes per axis must be 1 … 64 (0 = automatic)");
+  }
+  if (s.irradianceRes < 2 || s.distanceRes < 2 || s.rays < 1 || s.chebyshevPower < 0)
+    throw Error("probes: map resolutions must be at least 2 texels and rays at least 1");
+  glm::vec3 lo = bounds.valid() ? bounds.lo : glm::vec3(-0.5f), e = bounds.valid() ? bounds.extent() : glm::vec3(1.0f);
+  GiProbeGrid g{};
+  float minSpacing = 1e30f;
+  for (int a = 0; a < 3; ++a) {
+    float spacing = std::max(e[a], 1e-6f) / float(counts[a]);
+    g.spacing[a] = spacing;
+    g.origin[a] = lo[a] + 0.5f * spacing;
+    g.count[a] = counts[a];
+    minSpacing = std::min(minSpacing, spacing);
+  }
+  g.max_distance = s.maxDistance > 0.0f ? s.maxDistance : std::max(glm::length(e), 1e-3f);
+  g.normal_bias = s.normalBias * minSpacing;
+  g.view_bias = s.viewBias * minSpacing;
+  g.irradiance_res = s.irradianceRes;
+  g.distance_res = s.distanceRes;
+  g.rays = s.rays;
+  g.chebyshev_power = s.chebyshevPower;
+  g.backface_floor = s.backfaceFloor;
+  return g;
+}
+
+namespace {
+float signNotZero(float v) { return v >= 0.0f ? 1.0f : -1.0f; }
+}  // namespace
+
+glm::vec2 probeOctEncode(const glm::vec3& v) {
+  float l1 = std::fabs(v.x) + std::fabs(v.y) + std::fabs(v.z);
+  glm::vec2 p(v.x / l1, v.y / l1);
+  if (v.z < 0.0f) p = glm::vec2((1.0f - std::fabs(p.y)) * signNotZero(p.x), (1.0f - std::fabs(p.x)) * signNotZero(p.y));
+  return p;
+}
+
+glm::vec3 probeOctDecode(const glm::vec2& o) {
+  glm::vec3 v(o.x, o.y, 1.0f - std::fabs(o.x) - std::fabs(o.y));
+  if (v.z < 0.0f) {
+    float x = (1.0f - std::fabs(v.y)) * signNotZero(v.x);
+    float y = (1.0f - std::fabs(v.x)) * signNotZero(v.y);
+    v.x = x;
+    v.y = y;
+  }
+  return glm::normalize(v);
+}
+
+glm::vec3 probeTexelDirection(int tx, int ty, int res) {
+  return probeOctDecode(glm::vec2((float(tx) + 0.5f) / float(res) * 2.0f - 1.0f, (float(ty) + 0.5f) / float(res) * 2.0f - 1.0f));
+}
+
+std::vector<glm::vec4> probeRayDirections(int rays, uint32_t update) {
+  // A uniformly random rotation (Shoemake's unit quaternion) from 4 numbers of an mt19937 seeded
+  // with the update number; mt19937's output sequence is fixed by the standard.
+  std::mt19937 rng(0x9E3779B9u ^ (update * 2654435761u));
+  auto uniform = [&] { return float(rng() >> 8) * (1.0f / 16777216.0f); };
+  float u1 = uniform(), u2 = 6.2831853f * uniform(), u3 = 6.2831853f * uniform();
+  float a = std::sqrt(1.0f - u1), b = std::sqrt(u1);
+  glm::quat q(a * std::cos(u2), a * std::sin(u2), b * std::sin(u3), b * std::cos(u3));  // (w, x, y, z)
+  glm::mat3 rot = glm::mat3_cast(glm::normalize(q));
+  // Spherical Fibonacci: z uniform in (-1, 1), azimuth advancing by the golden angle.
+  std::vector<glm::vec4> dirs(static_cast<size_t>(rays));
+  const float golden = 0.61803398875f;
+  for (int i = 0; i < rays; ++i) {
+    float z = 1.0f - (2.0f * float(i) + 1.0f) / float(rays);
+    float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    float f = float(i) * golden;
+    float phi = 6.2831853f * (f - std::floor(f));
+    glm::vec3 d = rot * glm::vec3(r * std::cos(phi), r * std::sin(phi), z);
+    dirs[size_t(i)] = glm::vec4(glm::normalize(d), 0.0f);
+  }
+  return dirs;
+}
+
+ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& s)
+    : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce) {
+  bvh_ = std::make_unique<DeviceBvh>(ctx, scene, deviceScene);
+  program_ = ctx.buildProgram("kernels/gi/probes/probes.cl",
+                              {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)}});
+  trace_ = program_.kernel("probe_trace");
+  blendIrradiance_ = program_.kernel("probe_blend_irradiance");
+  blendDistance_ = program_.kernel("probe_blend_distance");
+  borderIrradiance_ = program_.kernel("probe_border_irradiance");
+  borderDistance_ = program_.kernel("probe_border_distance");
+  shade_ = program_.kernel("probe_shade");
+  size_t probes = size_t(probeCount());
+  size_t irrTexels = probes * size_t(s.irradianceRes + 2) * size_t(s.irradianceRes + 2);
+  size_t distTexels = probes * size_t(s.distanceRes + 2) * size_t(s.distanceRes + 2);
+  ctx.requireAllocation(irrTexels * 16 + distTexels * 8 + probes * size_t(s.rays) * 16,
+                        "probes: maps and rays (probes.grid_*, probes.*_res, probes.rays)");
+  irradiance_ = cl::Buffer(ctx, irrTexels * 16, CL_MEM_READ_WRITE, "probe irradiance maps");
+  distance_ = cl::Buffer(ctx, distTexels * 8, CL_MEM_READ_WRITE, "probe distance maps");
+  rayResults_ = cl::Buffer(ctx, probes * size_t(s.rays) * 16, CL_MEM_READ_WRITE, "probe ray results");
+  rayDirs_ = cl::Buffer(ctx, size_t(s.rays) * 16, CL_MEM_READ_ONLY, "probe ray directions");
+  // Before the first update: no light, and every direction open up to the ray length (the first
+  // update replaces both wherever a ray landed).
+  ctx.fill(irradiance_, glm::vec4(0.0f));
+  ctx.fill(distance_, glm::vec2(grid_.max_distance, grid_.max_distance * grid_.max_distance));
+  instanceEmits_ = ctx.upload(instanceEmissionFlags(scene), "probe instance emission flags");
+}
+
+void ProbeField::update(const DeviceScene& scene, float maxHysteresis) {
+  float hysteresis = std::min(maxHysteresis, float(updates_) / float(updates_ + 1));
+  std::vector<glm::vec4> dirs = probeRayDirections(grid_.rays, updates_);
+  ctx_.write(rayDirs_, dirs.data(), dirs.size() * sizeof(glm::vec4));
+  size_t probes = size_t(probeCount());
+
+  unsigned a = 0;
+  trace_.setArg(a++, grid_);
+  a = bvh_->setArgs(trace_, a);
+  trace_.setArg(a++, scene.positions);
+  trace_.setArg(a++, scene.normals);
+  trace_.setArg(a++, scene.tangents);
+  trace_.setArg(a++, scene.triangleInstance);
+  trace_.setArg(a++, instanceEmits_);
+  trace_.setArg(a++, scene.lights);
+  trace_.setArg(a++, int(scene.lightCount));
+  trace_.setArg(a++, rayDirs_);
+  trace_.setArg(a++, irradiance_);
+  trace_.setArg(a++, distance_);
+  trace_.setArg(a++, int(multiBounce_ && updates_ > 0));
+  trace_.setArg(a++, rayResults_);
+  size_t rays = probes * size_t(grid_.rays);
+  ctx_.launch(trace_, cl::NDRange::d1(cl::roundUp(rays, 64), 64), "probes: trace rays");
+
+  size_t irr = probes * size_t(grid_.irradiance_res) * size_t(grid_.irradiance_res);
+  blendIrradiance_.args(grid_, rayDirs_, rayResults_, hysteresis, irradiance_);
+  ctx_.launch(blendIrradiance_, cl::NDRange::d1(cl::roundUp(irr, 64), 64), "probes: blend irradiance");
+  size_t dist = probes * size_t(grid_.distance_res) * size_t(grid_.distance_res);
+  blendDistance_.args(grid_, rayDirs_, rayResults_, hysteresis, distance_);
+  ctx_.launch(blendDistance_, cl::NDRange::d1(cl::roundUp(dist, 64), 64), "probes: blend distance");
+
+  size_t irrSide = size_t(grid_.irradiance_res + 2), distSide = size_t(grid_.distance_res + 2);
+  borderIrradiance_.args(irradiance_, grid_.irradiance_res, int(probes));
+  ctx_.launch(borderIrradiance_, cl::NDRange::d1(cl::roundUp(probes * irrSide * irrSide, 64), 64), "probes: irradiance borders");
+  borderDistance_.args(distance_, grid_.distance_res, int(probes));
+  ctx_.launch(borderDistance_, cl::NDRange::d1(cl::roundUp(probes * distSide * distSide, 64), 64), "probes: distance borders");
+  ++updates_;
+}
+
+void ProbeField::shade(const GBuffer& g, cl::Buffer& indirect) {
+  shade_.args(grid_, irradiance_, distance_, g.view, g.position, g.geoNormal, g.normal, g.albedo, indirect);
+  ctx_.launch(shade_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4), "probes: shade");
+}
+
+}  // namespace gi

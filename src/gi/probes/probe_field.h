@@ -1,0 +1,91 @@
+// The light-field probe grid of the `probes` technique (McGuire et al. 2017 as seed 004 §4 used it;
+// ALGORITHMS.md §6; docs/techniques/probes.md): probes on a regular grid over the scene, each with
+// an octahedral irradiance map and an octahedral filtered-distance map (mean, mean²), updated by
+// tracing rays from the probes through the reference BVH (DDGI style, Majercik et al. 2019) and
+// read per camera pixel with trilinear, backface and Chebyshev weights (kernels/gi/probes/).
+//
+//   ProbeField field(ctx, scene, deviceScene, settings);
+//   field.update(deviceScene, 0.97f);   // one update: rays, blend with hysteresis, borders
+//   field.shade(gbuffer, indirect);     // ρ/π · E per pixel
+//
+// Not handled: probe relocation or classification (probes inside geometry are only muted by the
+// visibility test), glossy indirect light (the paper's probe ray marching), moving geometry (the
+// BVH is built once; lights may move).
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cl/runtime.h"
+#include "kernels/gi/probes/probe_types.h"
+#include "raster/gbuffer.h"
+#include "reference/bvh.h"
+#include "scene/device_scene.h"
+#include "scene/scene.h"
+
+namespace gi {
+
+struct ProbeSettings {
+  glm::ivec3 counts{0};          // probes per axis; 0 = automatic (autoProbeCounts)
+  int irradianceRes = 8;         // interior texels per side of an irradiance map
+  int distanceRes = 16;          // ... of a distance map
+  int rays = 64;                 // rays per probe per update
+  int distanceExponentLog2 = 6;  // distance filter weight max(0, cos)^(2^this)
+  int chebyshevPower = 3;
+  float backfaceFloor = 0.05f;    // smallest backface weight
+  bool multiBounce = true;       // ray hits also gather the probes' previous irradiance
+  float normalBias = 0.045f;     // fractions of the smallest probe spacing
+  float viewBias = 0.18f;
+  float maxDistance = 0.0f;      // metres; 0 = the scene's bounding-box diagonal
+};
+
+// The seed's Sponza layout generalised: 8 probes along the two longest axes of the scene bounds,
+// 4 along the shortest (8×8×4 = 256 for Sponza).
+glm::ivec3 autoProbeCounts(const Bounds& bounds);
+
+// Probes at the centres of a counts.x × counts.y × counts.z cell partition of the bounds (so none
+// lies on the bounding walls). Throws gi::Error for counts outside 1 … 64 or bad map sizes.
+GiProbeGrid fitProbeGrid(const Bounds& bounds, const ProbeSettings& settings);
+
+// Host mirrors of the kernels' octahedral mapping (seed 004 Algorithms 1 and 2), for tests.
+glm::vec2 probeOctEncode(const glm::vec3& unitDirection);
+glm::vec3 probeOctDecode(const glm::vec2& octahedral);
+glm::vec3 probeTexelDirection(int tx, int ty, int res);
+
+// The unit ray directions of update number `update`: a spherical Fibonacci set of `rays` points,
+// rotated by a pseudo-random rotation drawn from the update number (deterministic).
+std::vector<glm::vec4> probeRayDirections(int rays, uint32_t update);
+
+class ProbeField {
+public:
+  ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& settings);
+
+  // One update: trace grid.rays rays per probe, blend into the maps with weight
+  // min(maxHysteresis, k/(k+1)) for the old value at update k (k = 0 first: the running mean over
+  // the first updates, then an exponential average), copy the borders.
+  void update(const DeviceScene& deviceScene, float maxHysteresis);
+  void shade(const GBuffer& gbuffer, cl::Buffer& indirect);
+
+  const GiProbeGrid& grid() const { return grid_; }
+  int probeCount() const { return grid_.count[0] * grid_.count[1] * grid_.count[2]; }
+  uint32_t updates() const { return updates_; }
+  const cl::Buffer& irradiance() const { return irradiance_; }  // float4 per texel, layout probe_types.h
+  const cl::Buffer& distance() const { return distance_; }      // float2 per texel
+  uint64_t mapBytes() const { return irradiance_.bytes() + distance_.bytes(); }
+  uint64_t rayBytes() const { return rayResults_.bytes() + rayDirs_.bytes(); }
+  uint64_t bvhBytes() const { return bvh_->bytes(); }
+
+private:
+  cl::Context& ctx_;
+  GiProbeGrid grid_;
+  bool multiBounce_;
+  std::unique_ptr<DeviceBvh> bvh_;
+  cl::Program program_;
+  cl::Kernel trace_, blendIrradiance_, blendDistance_, borderIrradiance_, borderDistance_, shade_;
+  cl::Buffer irradiance_, distance_, rayDirs_, rayResults_, instanceEmits_;
+  uint32_t updates_ = 0;
+};
+
+}  // namespace gi

@@ -1,0 +1,84 @@
+// `probes`: a frame = [update the probes] -> shade every camera pixel from them.
+// Updates: probes.update=dynamic traces probes.rays rays per probe every frame and blends them in
+// with hysteresis (lights may move); static rebuilds the field completely on the first frame
+// (probes.rebuild_updates updates, a running mean, each one more bounce) and then only shades.
+#include "gi/probes/probes_technique.h"
+
+#include <memory>
+
+namespace gi {
+
+ProbeSettings probeSettings(const ParamSet& p) {
+  ProbeSettings s;
+  s.counts = glm::ivec3(p.getInt("probes.grid_x"), p.getInt("probes.grid_y"), p.getInt("probes.grid_z"));
+  s.irradianceRes = p.getInt("probes.irradiance_res");
+  s.distanceRes = p.getInt("probes.distance_res");
+  s.rays = p.getInt("probes.rays");
+  int exponent = std::stoi(p.getChoice("probes.distance_exponent"));
+  s.distanceExponentLog2 = 0;
+  while ((1 << s.distanceExponentLog2) < exponent) ++s.distanceExponentLog2;
+  s.chebyshevPower = p.getInt("probes.chebyshev_power");
+  s.multiBounce = p.getBool("probes.multibounce");
+  s.backfaceFloor = p.getFloat("probes.backface_floor");
+  s.normalBias = p.getFloat("probes.normal_bias");
+  s.viewBias = p.getFloat("probes.view_bias");
+  s.maxDistance = p.getFloat("probes.max_distance");
+  return s;
+}
+
+namespace {
+
+class ProbesTechnique : public Technique {
+public:
+  std::string name() const override { return "probes"; }
+
+  void setup(const FrameResources& f) override {
+    field_ = std::make_unique<ProbeField>(f.ctx, f.scene, f.deviceScene, probeSettings(f.params));
+  }
+
+  void render(const FrameResources& f, cl::Buffer& indirect) override {
+    const ParamSet& p = f.params;
+    if (p.getChoice("probes.update") == "dynamic") {
+      field_->update(f.deviceScene, p.getFloat("probes.hysteresis"));
+    } else if (field_->updates() == 0) {
+      int n = p.getInt("probes.rebuild_updates");
+      for (int i = 0; i < n; ++i) field_->update(f.deviceScene, 1.0f);  // running mean over all n
+    }
+    field_->shade(f.gbuffer, indirect);
+  }
+
+private:
+  std::unique_ptr<ProbeField> field_;
+};
+
+}  // namespace
+
+TechniqueInfo probesTechniqueInfo() {
+  return {"probes",
+          "light-field probes (McGuire et al. 2017, seed 004): octahedral irradiance and filtered-distance maps on a "
+          "probe grid, Chebyshev visibility, updated by ray tracing (DDGI style); diffuse indirect only",
+          [](ParamSet& p) {
+            p.addInt("probes.grid_x", 0, 0, 64, "probes along x; 0 = automatic (8 along the two longest axes, 4 along the shortest)");
+            p.addInt("probes.grid_y", 0, 0, 64, "probes along y; 0 = automatic");
+            p.addInt("probes.grid_z", 0, 0, 64, "probes along z; 0 = automatic");
+            p.addInt("probes.irradiance_res", 8, 2, 64, "interior texels per side of each probe's octahedral irradiance map");
+            p.addInt("probes.distance_res", 16, 2, 128, "interior texels per side of each probe's octahedral distance map");
+            p.addInt("probes.rays", 64, 1, 4096, "rays per probe per update");
+            p.addChoice("probes.update", "dynamic", {"dynamic", "static"},
+                        "dynamic: one update per frame blended with hysteresis; static: a full rebuild on the first frame only");
+            p.addFloat("probes.hysteresis", 0.97, 0.0, 1.0, "weight of the previous value in a dynamic update (DDGI)");
+            p.addInt("probes.rebuild_updates", 32, 1, 4096, "static: updates averaged in the full rebuild (each adds a bounce)");
+            p.addBool("probes.multibounce", true, "ray hits gather the probes' own irradiance (infinite bounces over updates)");
+            p.addChoice("probes.distance_exponent", "64", {"1", "2", "4", "8", "16", "32", "64"},
+                        "distance filter: ray weight max(0, cos)^this");
+            p.addInt("probes.chebyshev_power", 3, 0, 8, "the Chebyshev visibility bound is raised to this power");
+            p.addFloat("probes.backface_floor", 0.05, 0.0, 1.0,
+                        "smallest backface weight max(floor, n . direction to the probe) (seed 004 eq. 7 has 0)");
+            p.addFloat("probes.normal_bias", 0.045, 0.0, 1.0, "visibility test point offset along the normal, fraction of the smallest probe spacing");
+            p.addFloat("probes.view_bias", 0.18, 0.0, 1.0, "visibility test point offset towards the viewer, fraction of the smallest probe spacing");
+            p.addFloat("probes.max_distance", 0.0, 0.0, 1e6, "probe ray length in metres; 0 = the scene's bounding-box diagonal");
+          },
+          [] { return std::make_unique<ProbesTechnique>(); }};
+}
+
+}  // namespace gi
