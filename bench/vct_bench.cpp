@@ -36,18 +36,18 @@ int main(int argc, char** argv) {
       std::string title;
     };
     std::vector<Config> configs = {
-        {{"vct.resolution=128"}, "128^3 isotropic, 6 cones, full resolution, specular, re-voxelized every frame"},
+        {{"vct.resolution=128", "vct.mips=isotropic"}, "128^3 isotropic, 6 cones, full resolution, specular, re-voxelized every frame"},
         {{"vct.resolution=128", "vct.mips=anisotropic"}, "128^3 anisotropic, 6 cones, full resolution"},
-        {{"vct.resolution=128", "vct.downsample=2"}, "128^3 isotropic, 6 cones at half resolution + upsampling"},
+        {{"vct.resolution=128", "vct.mips=isotropic", "vct.downsample=2"}, "128^3 isotropic, 6 cones at half resolution + upsampling"},
         {{"vct.resolution=128", "vct.mips=anisotropic", "vct.downsample=2"}, "128^3 anisotropic, half resolution"},
     };
     if (!quick) {
-      configs.push_back({{"vct.resolution=128", "vct.cones=9"}, "128^3 isotropic, 9 cones (ten Brug)"});
-      configs.push_back({{"vct.resolution=128", "vct.bounces=2"}, "128^3 isotropic, second bounce"});
-      configs.push_back({{"vct.resolution=128", "vct.static=1"}, "128^3 isotropic, voxelized once (static)"});
-      configs.push_back({{"vct.resolution=32"}, "32^3 isotropic"});
-      configs.push_back({{"vct.resolution=64"}, "64^3 isotropic"});
-      configs.push_back({{"vct.resolution=256", "vct.downsample=2"}, "256^3 isotropic, half resolution"});
+      configs.push_back({{"vct.resolution=128", "vct.mips=isotropic", "vct.cones=9"}, "128^3 isotropic, 9 cones (ten Brug)"});
+      configs.push_back({{"vct.resolution=128", "vct.bounces=2"}, "128^3 anisotropic, second bounce"});
+      configs.push_back({{"vct.resolution=128", "vct.static=1"}, "128^3 anisotropic, voxelized once (static)"});
+      configs.push_back({{"vct.resolution=32"}, "32^3 anisotropic"});
+      configs.push_back({{"vct.resolution=64"}, "64^3 anisotropic"});
+      configs.push_back({{"vct.resolution=256", "vct.downsample=2"}, "256^3 anisotropic, half resolution"});
     }
     for (const Config& c : configs) timing::timeTechnique(ctx, scene, a, "vct", c.sets, c.title);
   } catch (const std::exception& e) {

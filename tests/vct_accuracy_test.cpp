@@ -1,12 +1,16 @@
 // Voxel cone tracing accuracy against the reference path tracer at 128×128 (issue 7). Bounds are
-// stated here and in docs/techniques/vct.md:
+// stated here and in docs/techniques/vct.md (which also has the error analysis):
 //   - empty Cornell box lit by the downward punctual spot light (as the vpl accuracy test): `vct`
 //     diffuse only (no specular cone) against the one-bounce-indirect diffuse reference (stored
 //     converged image when present, reference_store.h; else 512 spp in the test).
-//     Asserted: mean indirect radiance within 25 % (the issue's bound; measured +3 %).
-//   - full Cornell box (blocks), same spot, full image (direct + vct with the second bounce)
-//     against the full reference (512 spp): asserted SSIM ≥ 0.60 (measured 0.66); the issue asks
-//     0.85, NOT met (docs/techniques/vct.md: reference noise and the missing third+ bounces).
+//     Asserted: mean indirect radiance within 25 % (the issue's bound; measured +3.4 %).
+//   - full Cornell box (blocks), same spot, full image (direct + vct with 4 bounces) against the
+//     full reference: asserted SSIM ≥ 0.60. Measured 0.688 against a 512-spp reference and 0.766
+//     against a 2048-spp one (a 512-spp reference itself scores only 0.81 against it). The issue
+//     asks 0.85: NOT met. Measured why: the direct part is right (direct mean −0.9 %; raster
+//     direct + reference indirect scores 0.996); the indirect mean is −31.7 %, and its shape is
+//     wrong through self-illumination (lit floor +134 %) and self-occlusion (ceiling −77 %) of the
+//     wide cones, which sample coarse voxels containing the surface they start from.
 //   - Sponza (small, 96×54) with its sun, full image against a 16-spp reference: measured and
 //     printed with a sanity bound (see the docs page for the measured value and why the issue's
 //     0.85 cannot be judged against a 16-spp reference). Skipped without media.
@@ -42,10 +46,10 @@ TEST(VctAccuracy, EmptyCornellBoxOneBounceMean) {
 
 TEST(VctAccuracy, FullCornellBoxFullImageSsim) {
   Scene s = cornellWithSpot(true);
-  test::AccuracyPair p = test::renderAgainstReference(s, "vct", 128, 128, {"vct.resolution=64", "vct.bounces=2"},
+  test::AccuracyPair p = test::renderAgainstReference(s, "vct", 128, 128, {"vct.resolution=64", "vct.bounces=4"},
                                                       false, ReferenceMode::Full, false, "cornell_spot_full_128", 512);
   double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
-  std::printf("Cornell box (blocks), spot light, direct + vct 64^3 (2 bounces) vs full reference: SSIM %.4f "
+  std::printf("Cornell box (blocks), spot light, direct + vct 64^3 (4 bounces) vs full reference: SSIM %.4f "
               "(bound 0.60; issue target 0.85), mean %.5f vs %.5f\n", ssim, meanOf(p.raster), meanOf(p.reference));
   EXPECT_GE(ssim, 0.60);
 }

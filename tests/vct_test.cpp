@@ -13,6 +13,7 @@
 #include <random>
 
 #include "gi/vct/voxel_scene.h"
+#include "accuracy_support.h"
 #include "reference_scenes.h"
 #include "render/renderer.h"
 #include "scene/cornell_box.h"
@@ -552,5 +553,32 @@ TEST(Vct, FramesAreBitIdentical) {
     for (float v : images[0]) sum += v;
     EXPECT_GT(sum, 0.0);
     EXPECT_EQ(0, std::memcmp(images[0].data(), images[1].data(), images[0].size() * sizeof(float))) << mode;
+  }
+}
+
+TEST(Vct, EachBounceAddsOneSmallerOrderOfLight) {
+  // L_k = L_direct + T·L_(k−1): the indirect light grows with k by increments that shrink (every
+  // order is attenuated by albedo < 1 and the cones' losses). Re-injecting on top of the previous
+  // bounce instead of the direct light (counting orders twice) would make the increments grow.
+  Scene s = test::cornellWithSpot(true);
+  std::vector<double> mean;
+  for (int bounces = 1; bounces <= 4; ++bounces) {
+    RenderSettings rs;
+    rs.width = 32;
+    rs.height = 32;
+    rs.technique = "vct";
+    rs.sets = {"vct.resolution=32", "vct.specular=0", "vct.bounces=" + std::to_string(bounces),
+               "shadow.resolution=256"};
+    Renderer r(test::context(), s, rs);
+    r.renderFrame();
+    double sum = 0;
+    for (float v : r.indirectRadiance().pixels) sum += v;
+    mean.push_back(sum);
+  }
+  for (int k = 1; k < 4; ++k) {
+    double inc = mean[k] - mean[k - 1];
+    std::printf("bounces %d: indirect sum %.4f (+%.4f)\n", k + 1, mean[k], inc);
+    EXPECT_GT(inc, 0.0) << "bounce " << k + 1;
+    if (k > 1) EXPECT_LT(inc, mean[k - 1] - mean[k - 2]) << "bounce " << k + 1;
   }
 }

@@ -7,8 +7,10 @@
 // vct_specular  per pixel: adds F_Schlick(F0, n·ωo) · L_cone along the mirror direction, the cone's
 //               half-angle from the GGX width, tan θ = α (α = roughness²). The BRDF's directional
 //               albedo is approximated by F(n·ωo) alone (no masking term).
-// vct_bounce    per occupied voxel: adds ρ/π · E_indirect (the diffuse cones from the voxel's
-//               surface point along its normal) to its level-0 radiance: the second bounce.
+// vct_bounce    per occupied voxel: its injected direct level-0 radiance plus ρ/π · E_indirect, the
+//               diffuse cones from the voxel's surface point along its normal through the current
+//               mips. Run k − 1 times (re-mipping in between) for k bounces: each run adds one more
+//               order of the light paths (L_k = L_direct + T·L_{k−1}).
 // vct_trace_cones  arbitrary cones (tests, debugging).
 #include "common/brdf.h"
 #include "gi/vct/cone.h"
@@ -70,12 +72,12 @@ kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, global const float
   out[i].xyz += fresnel_schlick(spec.xyz, nv) * c.radiance.xyz;
 }
 
-kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* acc, global const float4* iso,
-                       global const float4* aniso, global float4* level0Out) {
+kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* acc, global const float4* direct,
+                       global const float4* iso, global const float4* aniso, global float4* level0Out) {
   int N = grid.resolution;
   size_t v = get_global_id(0);
   if (v >= (size_t)N * N * N) return;
-  float4 own = iso[v];
+  float4 own = direct[v];
   if (acc[GI_VOX_OPACITY * (size_t)N * N * N + v] == 0u) {
     level0Out[v] = own;
     return;

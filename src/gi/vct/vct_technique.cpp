@@ -62,15 +62,22 @@ public:
     voxels_->inject(f.deviceScene, f.shadowMaps);
     voxels_->buildMips(anisotropic);
     const cl::Buffer& aniso = anisotropic ? voxels_->aniso() : voxels_->iso();  // unread when isotropic
-    if (p.getInt("vct.bounces") == 2) {
+    int bounces = p.getInt("vct.bounces");
+    if (bounces > 1) {
       size_t n = voxels_->voxelCount();
-      if (!bounced_) bounced_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "vct second-bounce level 0");
+      if (!bounced_) {
+        bounced_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "vct multi-bounce level 0");
+        direct_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "vct injected direct level 0");
+      }
+      f.ctx.copy(voxels_->iso(), direct_, n * 16);
       VctTraceParams bp = tp;
       bp.applyAo = 0;
-      bounce_.args(grid, bp, voxels_->accumulators(), voxels_->iso(), aniso, bounced_);
-      f.ctx.launch(bounce_, cl::NDRange::d1(cl::roundUp(n, 64), 64), "vct: second bounce");
-      f.ctx.copy(bounced_, voxels_->iso(), n * 16);
-      voxels_->buildMips(anisotropic);
+      for (int b = 2; b <= bounces; ++b) {
+        bounce_.args(grid, bp, voxels_->accumulators(), direct_, voxels_->iso(), aniso, bounced_);
+        f.ctx.launch(bounce_, cl::NDRange::d1(cl::roundUp(n, 64), 64), "vct: bounce");
+        f.ctx.copy(bounced_, voxels_->iso(), n * 16);
+        voxels_->buildMips(anisotropic);
+      }
     }
 
     const GBuffer& g = f.gbuffer;
@@ -101,7 +108,7 @@ private:
   std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   cl::Program program_;
   cl::Kernel diffuse_, specular_, bounce_;
-  cl::Buffer low_, bounced_;
+  cl::Buffer low_, bounced_, direct_;
   int cones_ = 0, down_ = 0;
   bool voxelized_ = false;
 };
@@ -121,7 +128,9 @@ TechniqueInfo vctTechniqueInfo() {
             p.addBool("vct.specular", true, "trace one specular cone per pixel (aperture tan θ = GGX α)");
             p.addChoice("vct.ao", "off", {"off", "voxel"}, "voxel ambient occlusion: multiply the diffuse indirect light by it");
             p.addFloat("vct.ao_lambda", 1.0, 0.0, 1000.0, "AO distance falloff 1/(1 + λ·d), λ per metre");
-            p.addInt("vct.bounces", 1, 1, 2, "1: direct light injected; 2: also the cone-traced first bounce (second bounce)");
+            p.addInt("vct.bounces", 1, 1, 8,
+                     "light bounces in the voxels: 1 = injected direct light only; k = the cone-traced indirect "
+                     "light injected back k - 1 times (one voxel cone-tracing pass each)");
             p.addInt("vct.downsample", 1, 1, 4, "trace the diffuse cones at 1/downsample resolution, then upsample geometry-aware");
             p.addFloat("vct.tau_z", 0.05, 0.0, 10.0, "upsampling: relative view-depth tolerance");
             p.addFloat("vct.tau_n", 25.0, 0.0, 180.0, "upsampling: geometric-normal tolerance in degrees");
