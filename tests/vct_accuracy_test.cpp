@@ -5,8 +5,8 @@
 //     converged image when present, reference_store.h; else 512 spp in the test).
 //     Asserted: mean indirect radiance within 25 % (the issue's bound; measured +3.4 %).
 //   - full Cornell box (blocks), same spot, full image (direct + vct with 4 bounces) against the
-//     full reference: asserted SSIM ≥ 0.60. Measured 0.688 against a 512-spp reference and 0.766
-//     against a 2048-spp one (a 512-spp reference itself scores only 0.81 against it). The issue
+//     full reference (stored, 4096 spp): measured SSIM 0.783, asserted ≥ 0.75 (against the old
+//     in-test 512-spp render it was 0.688: a 512-spp reference itself scores only 0.81). The issue
 //     asks 0.85: NOT met. Measured why: the direct part is right (direct mean −0.9 %; raster
 //     direct + reference indirect scores 0.996); the indirect mean is −31.7 %, and its shape is
 //     wrong through self-illumination (lit floor +134 %) and self-occlusion (ceiling −77 %) of the
@@ -50,8 +50,8 @@ TEST(VctAccuracy, FullCornellBoxFullImageSsim) {
                                                       false, ReferenceMode::Full, false, "cornell_spot_full_128", 512);
   double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
   std::printf("Cornell box (blocks), spot light, direct + vct 64^3 (4 bounces) vs full reference: SSIM %.4f "
-              "(bound 0.60; issue target 0.85), mean %.5f vs %.5f\n", ssim, meanOf(p.raster), meanOf(p.reference));
-  EXPECT_GE(ssim, 0.60);
+              "(bound 0.75; issue target 0.85), mean %.5f vs %.5f\n", ssim, meanOf(p.raster), meanOf(p.reference));
+  EXPECT_GE(ssim, 0.75);
 }
 
 TEST(VctAccuracy, SponzaSmallFullImageSsim) {

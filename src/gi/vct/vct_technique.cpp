@@ -1,6 +1,6 @@
 // `vct`: voxel cone tracing (Crassin et al. 2011 as in seed 003 §3.4; ALGORITHMS.md §5).
 // A frame: voxelize (every frame, or once with vct.static=1) -> inject direct light from the
-// shadow maps -> isotropic or anisotropic mips -> [second bounce: cone-trace every voxel, inject,
+// shadow maps -> isotropic or anisotropic mips -> [bounces 2..k: cone-trace every voxel, inject,
 // re-mip] -> diffuse cones per pixel (optionally at reduced resolution + geometry-aware upsampling)
 // -> one specular cone per pixel. docs/techniques/vct.md.
 #include "gi/vct/vct_technique.h"
