@@ -5,16 +5,26 @@
 //   - empty Cornell box lit by the downward punctual spot (as the vpl test): `lpv`, one grid of
 //     32³ over the box, 32 iterations, against the one-bounce-indirect diffuse reference (256 spp).
 //     Asserted: mean indirect radiance within 25 % of the reference (the issue's bound; measured
-//     +21.4 %). SSIM printed (0.31: LPV light stays near the floor — see the docs page).
-//   - full Cornell box (blocks), same spot, full image (direct + lpv) vs the full reference
-//     (256 spp): measured SSIM 0.422, asserted >= 0.38. Issue target 0.85: NOT met.
-//   - Sponza 96×54 with its sun, default 3 cascades of 32³, full image vs a 16-spp reference:
-//     measured SSIM 0.486, asserted >= 0.45 (issue target 0.85: not met, and a 16-spp reference
-//     is too noisy to judge it; docs/results/lpv.md has the converged comparison). Skipped
-//     without media.
+//     +21.4 %). SSIM printed (0.358 against the converged reference: LPV light stays near the floor).
+//   - full Cornell box (blocks), same spot, full image (direct + lpv) vs the full reference:
+//     measured SSIM 0.470 against the stored converged reference (4096 spp; 0.422 against an in-test
+//     256-spp render); asserted >= 0.44. Issue target
+//     0.85: NOT met, and not reachable by a one-bounce technique here: direct + the path-traced
+//     one-bounce indirect scores 0.70 (the closed white box's orders >= 3 add 85 % to order 2).
+//     The LPV's own error: light stays within ~8 cells of the surfaces that reflected it (the box
+//     is 32 cells high), so the ceiling quarter of the image gets 0.2 % of its one-bounce light and
+//     the floor quarter 2.3x. Also at 16^3 x 64 iterations (light reaches the ceiling): measured
+//     0.710 (0.577 against 256 spp), asserted >= 0.67.
+//   - Sponza 96×54 with its sun, default 3 cascades of 32³, full image vs the stored converged
+//     reference (2048 spp): measured SSIM 0.763, asserted >= 0.72 (it was 0.486 against a 16-spp
+//     render: most of that gap was reference noise); direct + path-traced one-bounce scores about
+//     0.85 (against 1024 spp); the LPV indirect
+//     is 2.3x the one-bounce light (the sunlit floor lights itself). Skipped without media.
 //   - thin wall (builtin:thin_wall, 2 cm wall, 6.25 cm cells): indirect light in the dark room B
 //     over that in the lit room A, without / with the geometry volume: measured 0.0270 / 0.0048
 //     (the reference has none); asserted: the geometry volume removes at least half of the leak.
+// The decomposition (direct vs direct reference, one-bounce ceiling, noise, per-region ratios):
+// tests/lpv_accuracy_diagnosis_test.cpp and docs/techniques/lpv.md, "Accuracy".
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -50,13 +60,21 @@ TEST(LpvAccuracy, EmptyCornellBoxIndirectMeanWithin25Percent) {
 
 TEST(LpvAccuracy, FullCornellBoxFullImageSsim) {
   Scene s = cornellWithSpot(true);
-  test::AccuracyPair p =
-      test::renderAgainstReference(s, "lpv", 128, 128, kBoxSettings, false, ReferenceMode::Full, false,
-                                   "cornell_spot_full_128", 256);
-  double ssim = ssimOf(p, s.exposure);
-  std::printf("Cornell box (blocks), spot, direct + lpv vs full reference: SSIM %.4f (bound 0.38; issue target 0.85 "
-              "not met), mean %.5f vs %.5f\n", ssim, test::meanOf(p.raster), test::meanOf(p.reference));
-  EXPECT_GE(ssim, 0.38);
+  struct Config {
+    std::vector<std::string> sets;
+    double bound;
+  };
+  const Config configs[] = {{kBoxSettings, 0.44},
+                            {{"lpv.cascades=0", "lpv.resolution=16", "lpv.iterations=64"}, 0.67}};
+  for (const Config& c : configs) {
+    test::AccuracyPair p = test::renderAgainstReference(s, "lpv", 128, 128, c.sets, false, ReferenceMode::Full, false,
+                                                        "cornell_spot_full_128", 256);
+    double ssim = ssimOf(p, s.exposure);
+    std::printf("Cornell box (blocks), spot, direct + lpv (%s %s) vs full reference: SSIM %.4f (bound %.2f; issue "
+                "target 0.85 not met), mean %.5f vs %.5f\n", c.sets[1].c_str(), c.sets.size() > 2 ? c.sets[2].c_str() : "",
+                ssim, c.bound, test::meanOf(p.raster), test::meanOf(p.reference));
+    EXPECT_GE(ssim, c.bound) << c.sets[1];
+  }
 }
 
 TEST(LpvAccuracy, SponzaSmallFullImageSsim) {
@@ -67,9 +85,9 @@ TEST(LpvAccuracy, SponzaSmallFullImageSsim) {
   test::AccuracyPair p = test::renderAgainstReference(s, "lpv", 96, 54, {"rsm.resolution=256"}, false,
                                                       ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
   double ssim = ssimOf(p, s.exposure);
-  std::printf("Sponza 96x54, sun, direct + lpv (3 cascades of 32^3) vs full reference (16 spp): SSIM %.4f "
-              "(bound 0.45; issue target 0.85 not met)\n", ssim);
-  EXPECT_GE(ssim, 0.45);
+  std::printf("Sponza 96x54, sun, direct + lpv (3 cascades of 32^3) vs full reference: SSIM %.4f "
+              "(bound 0.72; issue target 0.85 not met)\n", ssim);
+  EXPECT_GE(ssim, 0.72);
 }
 
 // Mean indirect radiance of the columns that see only room B (the image's left half; +x points

@@ -425,6 +425,46 @@ TEST(LpvBlocking, WallCutsTransportedFluxByExpectedFactor) {
   EXPECT_NEAR(open, expectOpen, 1e-5 * expectOpen);
 }
 
+// Units and reach: a 32 × 32 layer of upward cosine-lobe VPLs (flux 1 each, 1 m cells) filling
+// the bottom of an empty 32³ grid, propagated 32 times without blocking; irradiance at
+// downward-facing receivers on the centre column, h cells above, against the exact irradiance of
+// those VPLs (Σ Φ cos θ cos θ' / (π r²)). Close to the source the two agree within the l <= 1
+// error (a missing π or s² would show here); farther up the LPV falls far below the exact value:
+// the propagation re-emits every face's flux as a cosine lobe along that face's normal, so light
+// turns by 90° at most steps and spreads like a random walk instead of travelling straight
+// (docs/techniques/lpv.md, "Accuracy"). Asserted: the units (h = 2 within 10 %); printed: the rest.
+TEST(LpvReach, UniformPlaneIrradianceAgainstExact) {
+  cl::Context& ctx = test::context();
+  const int n = 32;
+  LpvVolume v(ctx, n, 1);
+  v.begin({LpvCascade{glm::vec3(0.0f), 1.0f}}, 1.0f);
+  lpvref::Grid g(n, 1);
+  for (int z = 0; z < n; ++z)
+    for (int x = 0; x < n; ++x)
+      for (int ch = 0; ch < 3; ++ch) g.c[g.index(0, ch, {x, 0, z})] = lpvref::lobe({0, 1, 0}) / lpvref::kPi;
+  v.setInjected(g.c);
+  v.propagate(n, false);
+  std::vector<glm::vec4> acc = v.readAccumulated();
+  std::printf("uniform plane, %d^3, %d iterations: E_lpv / E_exact at h cells above:", n, n);
+  for (int h : {1, 2, 3, 4, 6, 8, 12, 16}) {
+    glm::vec4 c = acc[g.index(0, 0, {n / 2, h, n / 2})];
+    double lpv = GI_SH_COSCONV0 * GI_SH_Y0 * c.x + GI_SH_COSCONV1 * GI_SH_Y1 * c.y;  // receiver facing down
+    double exact = 0.0;
+    for (int z = 0; z < n; ++z)
+      for (int x = 0; x < n; ++x) {
+        double dx = x - n / 2, dz = z - n / 2, r2 = dx * dx + h * h + dz * dz;
+        exact += (h * h / r2) / (lpvref::kPi * r2);
+      }
+    std::printf(" %d: %.3g", h, lpv / exact);
+    if (h == 2) EXPECT_NEAR(lpv / exact, 1.0, 0.1);
+  }
+  // The plane lighting itself: irradiance at an upward-facing point of the plane (its lookup reads
+  // the VPL layer), relative to the plane's exitance (flux 1 per 1 m² cell); exact: 0.
+  glm::vec4 own = acc[g.index(0, 0, {n / 2, 0, n / 2})];
+  std::printf("; self-irradiance of the plane / its exitance: %.3f\n",
+              GI_SH_COSCONV0 * GI_SH_Y0 * own.x - GI_SH_COSCONV1 * GI_SH_Y1 * own.y);
+}
+
 TEST(LpvDeterminism, SameBitsTwice) {
   CornellOptions o;
   o.withAreaLight = false;
