@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gi/technique.h"
+#include "render/renderer.h"
 #include "sweep/spec.h"
 #include "test_support.h"
 #include "util/error.h"
@@ -210,4 +211,28 @@ TEST(Sweep, RefusesAFolderAnotherSweepIsWriting) {
   EXPECT_NE(r.output.find("another gi sweep is writing"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "out" / "runs"));
   fs::remove_all(dir);
+}
+
+// The specs shipped in bench/sweeps/ must keep working as techniques and parameters change: every
+// one parses, and every configuration names a registered technique (chain), parameters that exist
+// and are in range, and a scene config that exists in the repository.
+TEST(SweepSpec, ShippedSpecsNameRealScenesTechniquesAndParameters) {
+  const fs::path root = fs::path(GI_TEST_DATA_DIR).parent_path().parent_path();
+  int specs = 0;
+  for (const auto& entry : fs::directory_iterator(root / "bench" / "sweeps")) {
+    if (entry.path().extension() != ".json") continue;
+    ++specs;
+    SCOPED_TRACE(entry.path().string());
+    sweep::Spec spec;
+    ASSERT_NO_THROW(spec = sweep::loadSpec(entry.path().string()));
+    EXPECT_FALSE(spec.configurations.empty());
+    for (const sweep::Configuration& c : spec.configurations) {
+      SCOPED_TRACE(c.describe());
+      if (!c.scene.empty()) EXPECT_TRUE(fs::exists(root / c.scene)) << c.scene;
+      if (c.technique != "direct") EXPECT_NO_THROW(parseTechniqueChain(c.technique));
+      ParamSet params = declareAllParams();
+      for (const auto& [name, value] : c.params) EXPECT_NO_THROW(params.set(name, value)) << name << "=" << value;
+    }
+  }
+  EXPECT_GE(specs, 4);
 }
