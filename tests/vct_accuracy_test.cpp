@@ -11,9 +11,10 @@
 //     direct + reference indirect scores 0.996); the indirect mean is −31.7 %, and its shape is
 //     wrong through self-illumination (lit floor +134 %) and self-occlusion (ceiling −77 %) of the
 //     wide cones, which sample coarse voxels containing the surface they start from.
-//   - Sponza (small, 96×54) with its sun, full image against a 16-spp reference: measured and
-//     printed with a sanity bound (see the docs page for the measured value and why the issue's
-//     0.85 cannot be judged against a 16-spp reference). Skipped without media.
+//   - Sponza (small, 96×54) with its sun, 64³, 1 bounce, full image against the stored converged
+//     reference sponza_sun_full_96x54: measured SSIM 0.697, asserted ≥ 0.65; the issue's 0.85 is
+//     NOT met (sunlit floor lights itself, +215 % indirect; docs/techniques/vct.md). Skipped
+//     without media.
 //   - the thin-wall leak (builtin:thin_wall): the indirect light in the dark room B (reference:
 //     none) as a fraction of that in the lit room A, isotropic and anisotropic mips, measured and
 //     bounded.
@@ -62,10 +63,10 @@ TEST(VctAccuracy, SponzaSmallFullImageSsim) {
   test::AccuracyPair p = test::renderAgainstReference(s, "vct", 96, 54, {"vct.resolution=64", "shadow.resolution=1024"},
                                                       false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
   double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
-  std::printf("Sponza 96x54, sun, direct + vct 64^3 vs full reference (16 spp): SSIM %.4f (sanity bound 0.45; "
-              "issue target 0.85 not judged against a 16-spp reference), mean %.5f vs %.5f\n",
+  std::printf("Sponza 96x54, sun, direct + vct 64^3 vs full reference: SSIM %.4f (bound 0.65; issue target 0.85), "
+              "mean %.5f vs %.5f\n",
               ssim, meanOf(p.raster), meanOf(p.reference));
-  EXPECT_GE(ssim, 0.45);
+  EXPECT_GE(ssim, 0.65);
 }
 
 namespace {
