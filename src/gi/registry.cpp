@@ -7,6 +7,7 @@
 #include "gi/vct/vct_technique.h"
 #include "gi/ssao/ssao_technique.h"
 #include "gi/probes/probes_technique.h"
+#include "gi/second_order/second_order.h"
 
 namespace gi {
 
@@ -20,6 +21,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       vctTechniqueInfo(),
       ssaoTechniqueInfo(),
       probesTechniqueInfo(),
+      secondOrderTechniqueInfo(),
   };
   return registry;
 }

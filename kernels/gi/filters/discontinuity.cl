@@ -156,7 +156,7 @@ kernel void discontinuity_filter(int width, int height, global const float* plan
 // low-resolution pixel (u, v) stands for full-resolution pixel (u·GI_UP, v·GI_UP) and carries
 // that pixel's depth and geometric normal). Each full-resolution pixel takes the 2×2 nearest
 // low-resolution pixels with bilinear weights, keeps those passing the §3 test against its own
-// depth and normal, renormalises; if none passes it takes the nearest one. Output L = ρ/π · E.
+// depth and normal, renormalises; if none passes it takes the nearest one. Output L = ρ/π · max(0, E).
 #ifndef GI_UP
 #define GI_UP 2
 #endif
@@ -195,5 +195,6 @@ kernel void geometry_aware_upsample(int width, int height, int lowWidth, int low
   }
   int un = clamp((int)floor(fx + 0.5f), 0, lowWidth - 1), vn = clamp((int)floor(fy + 0.5f), 0, lowHeight - 1);
   float3 e = wsum > 0.0f ? sum / wsum : lowIrradiance[(size_t)vn * lowWidth + un].xyz;
-  out[i] = (float4)(albedo[i].xyz * (e * GI_INV_PI), 0.0f);
+  // Irradiance is never negative; second-order's net E_s − E_n can be (ALGORITHMS.md §2.6).
+  out[i] = (float4)(albedo[i].xyz * (max(e, 0.0f) * GI_INV_PI), 0.0f);
 }

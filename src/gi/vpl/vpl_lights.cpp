@@ -10,16 +10,6 @@ constexpr float kInvPi = 0.31830988618379067154f;
 
 float luminanceOf(glm::vec3 c) { return c.x * 0.2126f + c.y * 0.7152f + c.z * 0.0722f; }
 
-float radicalInverse(uint32_t i, uint32_t base) {
-  float inv = 1.0f / float(base), f = inv, r = 0.0f;
-  while (i > 0) {
-    r += float(i % base) * f;
-    i /= base;
-    f *= inv;
-  }
-  return r;
-}
-
 int cdfSearch(const float* cdf, int n, float t) {
   int lo = 0, hi = n - 1;
   while (lo < hi) {
@@ -30,6 +20,16 @@ int cdfSearch(const float* cdf, int n, float t) {
   return lo;
 }
 }  // namespace
+
+float radicalInverse(uint32_t i, uint32_t base) {
+  float inv = 1.0f / float(base), f = inv, r = 0.0f;
+  while (i > 0) {
+    r += float(i % base) * f;
+    i /= base;
+    f *= inv;
+  }
+  return r;
+}
 
 VplGenerator::VplGenerator(cl::Context& ctx, std::string label) : ctx_(ctx), label_(std::move(label)) {
   program_ = ctx_.buildProgram("kernels/gi/vpl/vpl_generate.cl");

@@ -38,6 +38,10 @@ private:
   int cdfRes_ = 0;
 };
 
+// Φ_base(i): the radical inverse of i in `base` (the Halton sequence's coordinate), in float as
+// the kernels compute it.
+float radicalInverse(uint32_t i, uint32_t base);
+
 // Host mirror of the generation (same formulas and summation order), for tests and the bench.
 struct HostVpl {
   glm::vec3 position{0};
