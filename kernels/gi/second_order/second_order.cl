@@ -22,11 +22,13 @@
 //   so_negative_lights  one work-item per negative light
 //   so_downsample       one work-item per half-resolution pixel: position, shading normal of (2u, 2v)
 //   so_compact          one work-item per row: list of flagged pixels + their SoA planes
-//   so_refine           GI_VW list entries per work-item: E over all lights, L = ρ/π·max(0, E)
+//   so_refine           GI_VW list entries per work-item: E over all lights, L = ρ/π·max(0, E);
+//                       with GI_VPL_VISIBILITY (vpl.visibility=rays) one shadow ray per pair
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/vector_width.h"
 #include "gi/vpl/vpl_pair.h"
+#include "gi/vpl/vpl_visibility.h"
 
 #define SO_FLAG_RESHADE 1
 #define SO_FLAG_SURFACE 2
@@ -212,11 +214,16 @@ kernel void so_compact(int width, int height, global const uchar* flags, global 
 }
 
 kernel void so_refine(global const int* counters, global const int* list, global const float* planes, int capacity,
-                      global const float4* vpls, int lightCount, global const float4* albedo, global float4* out) {
+                      global const float4* vpls, int lightCount, global const float4* albedo,
+                      global float4* out GI_VPL_VISIBILITY_PARAMS) {
+  GI_VPL_VISIBILITY_BEGIN
   size_t g = get_global_id(0);
   int count = counters[0];
   int first = (int)(g * GI_VW);
   if (first >= count) return;
+#ifdef GI_VPL_VISIBILITY
+  intV listed = (first + GI_LANES) < count;  // no rays for the stale slots past the list's end
+#endif
   floatV px = vloadV(g, planes), py = vloadV(g, planes + capacity), pz = vloadV(g, planes + 2 * capacity);
   floatV nx = vloadV(g, planes + 3 * capacity), ny = vloadV(g, planes + 4 * capacity);
   floatV nz = vloadV(g, planes + 5 * capacity);
@@ -224,6 +231,9 @@ kernel void so_refine(global const int* counters, global const int* list, global
   for (int k = 0; k < lightCount; ++k) {
     float4 a = vpls[3 * k], b = vpls[3 * k + 1], f = vpls[3 * k + 2];
     floatV gterm = vpl_pair_term(px, py, pz, nx, ny, nz, a, b);
+#ifdef GI_VPL_VISIBILITY
+    gterm = GI_VPL_VISIBLE(px, py, pz, a.xyz, GI_SEL((floatV)(0.0f), gterm, listed));
+#endif
     er += f.x * gterm;
     eg += f.y * gterm;
     eb += f.z * gterm;

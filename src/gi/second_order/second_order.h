@@ -14,6 +14,7 @@
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/technique.h"
 #include "gi/vpl/vpl_lights.h"
+#include "gi/vpl/vpl_visibility.h"
 
 namespace gi {
 
@@ -43,6 +44,9 @@ private:
   };
   cl::Program program_;
   cl::Kernel place_, flag_, rowCounts_, scanRows_, pickNegative_, negative_, downsample_, compact_, refine_;
+  cl::Program visibleProgram_;  // so_refine with visibility rays, built when first asked for
+  cl::Kernel visibleRefine_;
+  VplVisibility visibility_;
   std::unique_ptr<InterleavedGather> gather_;
   std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   std::unique_ptr<VplGenerator> fluxGenerator_;

@@ -63,6 +63,11 @@ void SecondOrderTechnique::render(const FrameResources& f, cl::Buffer& indirect)
   const int N = p.getInt("second-order.count");
   int M = p.getInt("second-order.negative");
   if (M < 0) M = N / 2;
+  // vpl.visibility=rays: every pair gets a shadow ray, E_s is already the occluded I_c and there
+  // is nothing left for negative lights to remove.
+  visibility_.update(f);
+  const bool rays = visibility_.enabled();
+  if (rays) M = 0;
   const std::string placement = p.getChoice("second-order.placement");
   const float dmin = p.getFloat("second-order.d_min");
   const bool multires = p.getBool("second-order.multires");
@@ -156,7 +161,7 @@ void SecondOrderTechnique::render(const FrameResources& f, cl::Buffer& indirect)
                "second-order: half resolution");
     gather_->resize(lowW_, lowH_, 1, 1);
     gather_->deinterleave(low_);
-    gather_->shade(lights_);
+    gather_->shade(lights_, &visibility_);
     gather_->reinterleaveIrradiance(lowIrradiance_);
     GeometryTest t;
     t.tauZ = tauD;
@@ -169,9 +174,16 @@ void SecondOrderTechnique::render(const FrameResources& f, cl::Buffer& indirect)
   // Full-resolution re-shading of the listed pixels.
   compact_.args(W, H, flags_, rowOffsets_, g.position, g.normal, capacity, list_, planes_);
   ctx.launch(compact_, cl::NDRange::d1(cl::roundUp(H, 8), 8), "second-order: re-shade list");
-  refine_.args(counters_, list_, planes_, capacity, lights_.vpls, lightCount, g.albedo, indirect);
+  if (rays && !visibleRefine_.get()) {
+    visibleProgram_ = ctx.buildProgram("kernels/gi/second_order/second_order.cl", visibility_.defines());
+    visibleRefine_ = visibleProgram_.kernel("so_refine");
+  }
+  cl::Kernel& refine = rays ? visibleRefine_ : refine_;
+  refine.args(counters_, list_, planes_, capacity, lights_.vpls, lightCount, g.albedo, indirect);
+  visibility_.setArgs(refine, 8);
   size_t items = size_t(capacity) / size_t(vw), local = vw > 1 ? 16 : 64;
-  ctx.launch(refine_, cl::NDRange::d1(cl::roundUp(items, local), local), "second-order: full-resolution shade");
+  ctx.launch(refine, cl::NDRange::d1(cl::roundUp(items, local), local),
+             rays ? "second-order: full-resolution shade + rays" : "second-order: full-resolution shade");
 }
 
 std::vector<glm::vec4> haltonConeDirections(float cosAccept, int count) {
@@ -285,11 +297,12 @@ HostVpl hostNegativeLight(const std::vector<HostVpl>& positive, glm::vec3 x, glm
 TechniqueInfo secondOrderTechniqueInfo() {
   return {"second-order",
           "Cochran & Steele: Halton-placed indirect lights from the spot's RSM, negative lights for indirect occlusion, "
-          "half-resolution shading with full-resolution re-shading at normal/depth discontinuities",
+          "half-resolution shading with full-resolution re-shading at normal/depth discontinuities; visibility per vpl.visibility",
           [](ParamSet& p) {
             p.addInt("second-order.count", 256, 1, 4096, "indirect lights N per light (Halton points in the light's cone)");
             p.addInt("second-order.negative", -1, -1, 4096,
-                     "negative lights M (Halton pixels over the screen); -1 = N/2, 0 = none (simple indirect illumination)");
+                     "negative lights M (Halton pixels over the screen); -1 = N/2, 0 = none (simple indirect "
+                     "illumination); always 0 with vpl.visibility=rays");
             p.addChoice("second-order.placement", "halton", {"halton", "random", "flux"},
                         "indirect-light placement: halton (the paper), random (new uniform points every frame), "
                         "flux (the VPL generator's flux-importance sampling)");
