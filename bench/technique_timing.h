@@ -23,11 +23,12 @@ struct FrameSettings {
 };
 
 // The common command line of the technique benchmarks:
-//   [--scene S] [--width W --height H] [--frames N] [--quick]
+//   [--scene S] [--width W --height H] [--frames N] [--quick] [--only NAME]
 struct BenchArgs {
   FrameSettings frames;
   std::string scenePath = "scenes/sponza.json";
   bool quick = false;
+  std::string only;  // a benchmark with several parts runs only this one
 };
 
 // False (with the usage printed) on an unknown argument.
@@ -40,8 +41,10 @@ inline bool parseBenchArgs(int argc, char** argv, const char* program, BenchArgs
     else if (k == "--height") a.frames.height = std::stoi(next());
     else if (k == "--frames") a.frames.frames = std::stoi(next());
     else if (k == "--quick") a.quick = true;
+    else if (k == "--only") a.only = next();
     else {
-      std::fprintf(stderr, "usage: %s [--scene S] [--width W --height H] [--frames N] [--quick]\n", program);
+      std::fprintf(stderr, "usage: %s [--scene S] [--width W --height H] [--frames N] [--quick] [--only NAME]\n",
+                   program);
       return false;
     }
   }

@@ -8,6 +8,7 @@
 //   - builtin:thin_wall: probes in the lit room do not light the dark room through the wall
 //     (Chebyshev visibility: below 1.5 % of the lit room), and without the visibility term they
 //     do (more than 3 × as much: the test can fail);
+//   - the lane-wise shading kernel equals the scalar probe_field_irradiance() the probe rays use;
 //   - a uniform field shades every pixel with exactly ρ/π · E; frames are bit-identical.
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <random>
 
 #include "accuracy_support.h"
@@ -311,17 +313,28 @@ TEST(ProbeAccuracy, ThinWallProbeDoesNotLightTheOtherSide) {
   EXPECT_GT(without.roomB, 3.0 * with.roomB);  // the scene does test the visibility term
 }
 
+namespace {
+
+// A rendered direct-light frame of `s`: the G-buffer the shading tests read.
+std::unique_ptr<Renderer> directFrame(const Scene& s, int width, int height) {
+  RenderSettings rs;
+  rs.width = width;
+  rs.height = height;
+  rs.technique = "direct";
+  rs.sets = {"shadow.resolution=256"};
+  auto r = std::make_unique<Renderer>(context(), s, rs);
+  r->renderFrame();
+  return r;
+}
+
+}  // namespace
+
 TEST(ProbeKernels, UniformFieldShadesAlbedoOverPiTimesE) {
   // Every probe's irradiance map = E0 in all directions: whatever the weights, the blend returns E0,
   // so each surface pixel's indirect radiance is ρ/π · E0.
   Scene s = cornellWithSpot(true);
-  RenderSettings rs;
-  rs.width = 48;
-  rs.height = 48;
-  rs.technique = "direct";
-  rs.sets = {"shadow.resolution=256"};
-  Renderer r(context(), s, rs);
-  r.renderFrame();
+  std::unique_ptr<Renderer> frame = directFrame(s, 48, 48);
+  Renderer& r = *frame;
   ProbeSettings ps;
   ps.counts = glm::ivec3(3, 2, 2);
   ProbeField field(context(), s, r.deviceScene(), ps);
@@ -347,6 +360,35 @@ TEST(ProbeKernels, UniformFieldShadesAlbedoOverPiTimesE) {
   std::printf("uniform field: %d surface pixels, max relative error %.2e, %d with all weights 0\n", surfaces, maxRel, dark);
   EXPECT_LT(maxRel, 1e-5);
   EXPECT_LT(dark, surfaces / 100);
+}
+
+TEST(ProbeKernels, LaneWiseShadingEqualsScalarFunction) {
+  Scene s = cornellWithSpot(true);
+  std::unique_ptr<Renderer> frame = directFrame(s, 45, 40);  // 45: a partial group at the right border
+  Renderer& r = *frame;
+  ProbeSettings ps;
+  ps.counts = glm::ivec3(3, 2, 2);
+  ps.rays = 64;
+  ProbeField field(context(), s, r.deviceScene(), ps);
+  for (int i = 0; i < 4; ++i) field.update(r.deviceScene(), 1.0f);
+  const GBuffer& g = r.gbuffer();
+  size_t n = size_t(g.width) * g.height;
+  cl::Buffer lanes(context(), n * 16), scalar(context(), n * 16);
+  field.shade(g, lanes);
+  cl::Program prog = context().buildProgram("kernels/gi/probes/probe_test_kernels.cl");
+  cl::Kernel k = prog.kernel("probe_shade_scalar");
+  k.args(field.grid(), field.irradiance(), field.distance(), g.view, g.position, g.geoNormal, g.normal, g.albedo, scalar);
+  context().launch(k, cl::NDRange::d2(cl::roundUp(g.width, 8), cl::roundUp(g.height, 8), 8, 8));
+  std::vector<glm::vec4> a = context().download<glm::vec4>(lanes), b = context().download<glm::vec4>(scalar);
+  double maxDiff = 0, maxValue = 0;
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      maxDiff = std::max(maxDiff, double(std::fabs(a[i][c] - b[i][c])));
+      maxValue = std::max(maxValue, double(std::fabs(b[i][c])));
+    }
+  std::printf("lane-wise shading vs scalar function: max difference %.2e (largest value %.3f)\n", maxDiff, maxValue);
+  EXPECT_GT(maxValue, 0.0);
+  EXPECT_LT(maxDiff, 1e-4 * maxValue);
 }
 
 TEST(ProbeTechnique, FramesAreBitIdenticalAndBadGridIsRejected) {

@@ -15,6 +15,7 @@
 // as the path tracer does; only the diffuse lobe is used (diffuse indirect light only).
 #include "common/brdf.h"
 #include "common/lights.h"
+#include "common/vector_width.h"
 #include "gi/probes/probe_field.h"
 #include "reference/hit_surface.h"
 
@@ -68,50 +69,91 @@ kernel void probe_trace(GiProbeGrid grid, GI_BVH_ARGS, global const float4* posi
   rayResults[gid] = (float4)(L, hit.t);
 }
 
+// The blend kernels: one work-item takes GI_VW texels of one probe's map as the lanes of floatV
+// and loops over the update's rays, each ray broadcast to all lanes (the VPL-gather pattern of
+// PERFORMANCE_FACTS.md 2: a per-texel loop would run as scalar code). Lanes past the map's last
+// texel repeat it and are not stored.
+
+// Unit directions of the texel centres t (row-major in a res × res map), lane-wise
+// (probe_texel_direction()).
+inline void probe_texel_directionsV(intV t, int res, floatV* dx, floatV* dy, floatV* dz) {
+  floatV ox = (convert_floatV(t % res) + 0.5f) / (float)res * 2.0f - 1.0f;
+  floatV oy = (convert_floatV(t / res) + 0.5f) / (float)res * 2.0f - 1.0f;
+  floatV vz = 1.0f - fabs(ox) - fabs(oy);
+  floatV one = (floatV)(1.0f), minusOne = (floatV)(-1.0f);
+  floatV fx = (1.0f - fabs(oy)) * GI_SEL(minusOne, one, ox >= 0.0f);
+  floatV fy = (1.0f - fabs(ox)) * GI_SEL(minusOne, one, oy >= 0.0f);
+  intV lower = vz < 0.0f;
+  floatV vx = GI_SEL(ox, fx, lower), vy = GI_SEL(oy, fy, lower);
+  floatV inv = 1.0f / sqrt(vx * vx + vy * vy + vz * vz);
+  *dx = vx * inv;
+  *dy = vy * inv;
+  *dz = vz * inv;
+}
+
+// Stores lane l of (a, b, c) to map[index of texel t_l] for the valid lanes; `old` lanes come
+// from there too. Texel t of probe p: p · (res + 2)² + (t / res + 1) · (res + 2) + t % res + 1.
+#define PROBE_TEXEL_INDEX(p, t, res) ((size_t)(p) * ((res) + 2) * ((res) + 2) + ((t) / (res) + 1) * ((res) + 2) + (t) % (res) + 1)
+
 // hysteresis: weight of the texel's previous value (0 on the first update).
 kernel void probe_blend_irradiance(GiProbeGrid grid, global const float4* rayDirs, global const float4* rayResults,
                                    float hysteresis, global float4* irradiance) {
-  int res = grid.irradiance_res, gid = get_global_id(0);
-  int probe = gid / (res * res), texel = gid % (res * res);
+  int res = grid.irradiance_res, texels = res * res, groups = (texels + GI_VW - 1) / GI_VW;
+  int gid = get_global_id(0), probe = gid / groups, t0 = (gid % groups) * GI_VW;
   if (probe >= probe_total(&grid)) return;
-  int tx = texel % res, ty = texel / res;
-  float3 n = probe_texel_direction(tx, ty, res);
+  floatV nx, ny, nz;
+  probe_texel_directionsV(min(t0 + (intV)(GI_LANES), texels - 1), res, &nx, &ny, &nz);
   global const float4* rays = rayResults + (size_t)probe * grid.rays;
-  float3 sum = (float3)(0.0f);
-  float wsum = 0.0f;
+  floatV zero = (floatV)(0.0f), sx = zero, sy = zero, sz = zero, wsum = zero;
   for (int r = 0; r < grid.rays; ++r) {
-    float w = fmax(0.0f, dot(n, rayDirs[r].xyz));
-    sum += w * rays[r].xyz;
+    float4 d = rayDirs[r], L = rays[r];
+    floatV w = fmax(nx * d.x + ny * d.y + nz * d.z, 0.0f);
+    sx += w * L.x;
+    sy += w * L.y;
+    sz += w * L.z;
     wsum += w;
   }
-  if (wsum <= 0.0f) return;  // no ray in this texel's hemisphere this time: keep the old value
-  int side = res + 2;
-  size_t i = (size_t)probe * side * side + (ty + 1) * side + tx + 1;
-  float3 E = M_PI_F * sum / wsum;
-  irradiance[i] = (float4)(mix(E, irradiance[i].xyz, hysteresis), 0.0f);
+  floatV scale = M_PI_F / wsum;
+  float ex[GI_VW], ey[GI_VW], ez[GI_VW], ws[GI_VW];
+  vstoreV(sx * scale, 0, ex);
+  vstoreV(sy * scale, 0, ey);
+  vstoreV(sz * scale, 0, ez);
+  vstoreV(wsum, 0, ws);
+  for (int l = 0; l < GI_VW && t0 + l < texels; ++l) {
+    if (ws[l] <= 0.0f) continue;  // no ray in this texel's hemisphere this time: keep the old value
+    size_t i = PROBE_TEXEL_INDEX(probe, t0 + l, res);
+    irradiance[i] = (float4)(mix((float3)(ex[l], ey[l], ez[l]), irradiance[i].xyz, hysteresis), 0.0f);
+  }
 }
 
 kernel void probe_blend_distance(GiProbeGrid grid, global const float4* rayDirs, global const float4* rayResults,
                                  float hysteresis, global float2* distance) {
-  int res = grid.distance_res, gid = get_global_id(0);
-  int probe = gid / (res * res), texel = gid % (res * res);
+  int res = grid.distance_res, texels = res * res, groups = (texels + GI_VW - 1) / GI_VW;
+  int gid = get_global_id(0), probe = gid / groups, t0 = (gid % groups) * GI_VW;
   if (probe >= probe_total(&grid)) return;
-  int tx = texel % res, ty = texel / res;
-  float3 n = probe_texel_direction(tx, ty, res);
+  floatV nx, ny, nz;
+  probe_texel_directionsV(min(t0 + (intV)(GI_LANES), texels - 1), res, &nx, &ny, &nz);
   global const float4* rays = rayResults + (size_t)probe * grid.rays;
-  float2 sum = (float2)(0.0f);
-  float wsum = 0.0f;
+  floatV zero = (floatV)(0.0f), s1 = zero, s2 = zero, wsum = zero;
   for (int r = 0; r < grid.rays; ++r) {
-    float w = fmax(0.0f, dot(n, rayDirs[r].xyz));
-    for (int k = 0; k < GI_PROBE_DISTANCE_EXPONENT_LOG2; ++k) w *= w;  // max(0, cos)^(2^k), no pow()
+    float4 d = rayDirs[r];
     float t = rays[r].w;
-    sum += w * (float2)(t, t * t);
+    floatV w = fmax(nx * d.x + ny * d.y + nz * d.z, 0.0f);
+#pragma unroll
+    for (int k = 0; k < GI_PROBE_DISTANCE_EXPONENT_LOG2; ++k) w *= w;  // max(0, cos)^(2^k), no pow()
+    s1 += w * t;
+    s2 += w * (t * t);
     wsum += w;
   }
-  if (wsum <= 0.0f) return;
-  int side = res + 2;
-  size_t i = (size_t)probe * side * side + (ty + 1) * side + tx + 1;
-  distance[i] = mix(sum / wsum, distance[i], hysteresis);
+  float m1[GI_VW], m2[GI_VW], ws[GI_VW];
+  vstoreV(s1 / wsum, 0, m1);
+  vstoreV(s2 / wsum, 0, m2);
+  vstoreV(wsum, 0, ws);
+  for (int l = 0; l < GI_VW && t0 + l < texels; ++l) {
+    if (ws[l] <= 0.0f) continue;
+    size_t i = PROBE_TEXEL_INDEX(probe, t0 + l, res);
+    distance[i] = mix((float2)(m1[l], m2[l]), distance[i], hysteresis);
+  }
 }
 
 // Border texel (x, y) of a bordered map (x or y is 0 or res + 1) repeats the interior texel that
@@ -138,23 +180,133 @@ inline int probe_border_source(int x, int y, int res) {
 PROBE_BORDER_KERNEL(probe_border_irradiance, float4)
 PROBE_BORDER_KERNEL(probe_border_distance, float2)
 
-// Indirect radiance ρ/π · E per camera pixel (0 on the background).
+// probe_field_irradiance() for GI_VW pixels at once, lanes as floatV (PERFORMANCE_FACTS.md 2:
+// a per-pixel loop over the 8 probes would run as scalar code). The formulas are those of
+// probe_field.h, written lane-wise; map texels are gathered per lane. The octahedral footprint of
+// the normal is the same for the 8 probes and is computed once.
+inline void probe_octahedral_footprintV(floatV dx, floatV dy, floatV dz, int res, intV* offset, floatV* tx,
+                                        floatV* ty) {
+  floatV inv = 1.0f / (fabs(dx) + fabs(dy) + fabs(dz));
+  floatV px = dx * inv, py = dy * inv;
+  floatV one = (floatV)(1.0f), minusOne = (floatV)(-1.0f);
+  intV lower = dz < 0.0f;
+  floatV qx = GI_SEL(px, (1.0f - fabs(py)) * GI_SEL(minusOne, one, px >= 0.0f), lower);
+  floatV qy = GI_SEL(py, (1.0f - fabs(px)) * GI_SEL(minusOne, one, py >= 0.0f), lower);
+  floatV fx = (qx * 0.5f + 0.5f) * (float)res + 0.5f, fy = (qy * 0.5f + 0.5f) * (float)res + 0.5f;
+  // A NaN direction (background lanes) is clamped to texel 0: in range, and not stored.
+  intV x0 = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(fx), fx == fx)), 0, res);
+  intV y0 = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(fy), fy == fy)), 0, res);
+  *tx = clamp(fx - convert_floatV(x0), 0.0f, 1.0f);
+  *ty = clamp(fy - convert_floatV(y0), 0.0f, 1.0f);
+  *offset = y0 * (res + 2) + x0;
+}
+
+inline floatV probe_bilerpV(global const float* map, intV i00, int rowStride, int component, int texelFloats,
+                            floatV tx, floatV ty) {
+  intV a = i00 * texelFloats + component, b = a + texelFloats, c = a + rowStride * texelFloats, d = c + texelFloats;
+  floatV top = mix(GI_GATHER(floatV, map, a), GI_GATHER(floatV, map, b), tx);
+  floatV bottom = mix(GI_GATHER(floatV, map, c), GI_GATHER(floatV, map, d), tx);
+  return mix(top, bottom, ty);
+}
+
+inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float* irradiance,
+                                       global const float* distance, float3V x, float3V n, float3V ng, float3V wo) {
+  int cx = g->count[0], cy = g->count[1], cz = g->count[2];
+  float sx = g->spacing[0], sy = g->spacing[1], sz = g->spacing[2];
+  float ox = g->origin[0], oy = g->origin[1], oz = g->origin[2];
+  floatV xbx = x.x + ng.x * g->normal_bias + wo.x * g->view_bias;
+  floatV xby = x.y + ng.y * g->normal_bias + wo.y * g->view_bias;
+  floatV xbz = x.z + ng.z * g->normal_bias + wo.z * g->view_bias;
+  floatV rx = (xbx - ox) / sx, ry = (xby - oy) / sy, rz = (xbz - oz) / sz;
+  intV bx = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rx), rx == rx)), 0, max(cx - 2, 0));
+  intV by = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(ry), ry == ry)), 0, max(cy - 2, 0));
+  intV bz = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rz), rz == rz)), 0, max(cz - 2, 0));
+  floatV ax = clamp(rx - convert_floatV(bx), 0.0f, 1.0f), ay = clamp(ry - convert_floatV(by), 0.0f, 1.0f),
+         az = clamp(rz - convert_floatV(bz), 0.0f, 1.0f);
+  int ires = g->irradiance_res, iside = ires + 2, dres = g->distance_res, dside = dres + 2;
+  intV irrOffset;
+  floatV itx, ity;
+  probe_octahedral_footprintV(n.x, n.y, n.z, ires, &irrOffset, &itx, &ity);
+  floatV zero = (floatV)(0.0f);
+  floatV Ex = zero, Ey = zero, Ez = zero, wsum = zero;
+#pragma unroll
+  for (int c = 0; c < 8; ++c) {
+    int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
+    floatV w = (offx ? ax : 1.0f - ax) * (offy ? ay : 1.0f - ay) * (offz ? az : 1.0f - az);
+    intV pix = min(bx + offx, cx - 1), piy = min(by + offy, cy - 1), piz = min(bz + offz, cz - 1);
+    intV probe = (piz * cy + piy) * cx + pix;
+    floatV ppx = ox + convert_floatV(pix) * sx, ppy = oy + convert_floatV(piy) * sy, ppz = oz + convert_floatV(piz) * sz;
+    floatV tpx = ppx - x.x, tpy = ppy - x.y, tpz = ppz - x.z;
+    floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
+    w *= GI_SEL((floatV)(1.0f), fmax(g->backface_floor, (n.x * tpx + n.y * tpy + n.z * tpz) / len), len > 0.0f);
+    floatV fpx = xbx - ppx, fpy = xby - ppy, fpz = xbz - ppz;
+    floatV r = sqrt(fpx * fpx + fpy * fpy + fpz * fpz);
+    intV far = r > 0.0f;
+    intV distOffset;
+    floatV dtx, dty;
+    probe_octahedral_footprintV(GI_SEL(n.x, fpx, far), GI_SEL(n.y, fpy, far), GI_SEL(n.z, fpz, far), dres,
+                                &distOffset, &dtx, &dty);
+    intV d00 = probe * (dside * dside) + distOffset;
+    floatV mean = probe_bilerpV(distance, d00, dside, 0, 2, dtx, dty);
+    floatV mean2 = probe_bilerpV(distance, d00, dside, 1, 2, dtx, dty);
+    floatV variance = fabs(mean2 - mean * mean), d = r - mean;
+    floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
+#pragma unroll
+    for (int k = 0; k < GI_PROBE_MAX_CHEBYSHEV_POWER; ++k) v = k < g->chebyshev_power ? v * cheb : v;
+    w *= GI_SEL((floatV)(1.0f), v, r > mean);
+    intV i00 = probe * (iside * iside) + irrOffset;
+    Ex += w * probe_bilerpV(irradiance, i00, iside, 0, 4, itx, ity);
+    Ey += w * probe_bilerpV(irradiance, i00, iside, 1, 4, itx, ity);
+    Ez += w * probe_bilerpV(irradiance, i00, iside, 2, 4, itx, ity);
+    wsum += w;
+  }
+  floatV inv = GI_SEL(zero, 1.0f / wsum, wsum > 0.0f);
+  return f3v(Ex * inv, Ey * inv, Ez * inv);
+}
+
+// One work-item: GI_VW adjacent pixels (u, v) of a (⌈W/down⌉ × ⌈H/down⌉) image, pixel (u, v)
+// evaluated at camera pixel (u·down, v·down): down = 1 writes the indirect radiance ρ/π · E,
+// down > 1 writes E for the geometry-aware upsampler (gi/filters). Background: 0.
 kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, global const float2* distance, GiView camera,
                         global const float4* gPosition, global const float4* gGeoNormal, global const float4* gNormal,
-                        global const float4* gAlbedo, global float4* indirect) {
-  int px = get_global_id(0), py = get_global_id(1);
-  if (px >= camera.width || py >= camera.height) return;
-  size_t i = (size_t)py * camera.width + px;
-  float4 p = gPosition[i];
-  if (p.w == 0.0f) {
-    indirect[i] = (float4)(0.0f);
-    return;
+                        global const float4* gAlbedo, int down, global float4* out) {
+  int u0 = get_global_id(0) * GI_VW, v = get_global_id(1);
+  int lw = (camera.width + down - 1) / down, lh = (camera.height + down - 1) / down;
+  if (u0 >= lw || v >= lh) return;
+  int valid = min(GI_VW, lw - u0);
+  size_t row = (size_t)min(v * down, camera.height - 1) * camera.width;
+  // Camera pixel of each lane (lanes past the end repeat the last valid one).
+  intV px = min(min((intV)(u0) + (intV)(GI_LANES), (intV)(u0 + valid - 1)) * down, camera.width - 1);
+  floatV pw;
+  float3V x, ng, n, alb;
+  intV i4 = (convert_intV(px) + (int)row) * 4;
+  global const float* P = (global const float*)gPosition;
+  global const float* G = (global const float*)gGeoNormal;
+  global const float* N = (global const float*)gNormal;
+  global const float* A = (global const float*)gAlbedo;
+  x = f3v(GI_GATHER(floatV, P, i4), GI_GATHER(floatV, P, i4 + 1), GI_GATHER(floatV, P, i4 + 2));
+  pw = GI_GATHER(floatV, P, i4 + 3);
+  ng = f3v(GI_GATHER(floatV, G, i4), GI_GATHER(floatV, G, i4 + 1), GI_GATHER(floatV, G, i4 + 2));
+  n = f3v(GI_GATHER(floatV, N, i4), GI_GATHER(floatV, N, i4 + 1), GI_GATHER(floatV, N, i4 + 2));
+  float3V wo;
+  if (camera.orthographic) {
+    float3 w = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
+    wo = f3v((floatV)(w.x), (floatV)(w.y), (floatV)(w.z));
+  } else {
+    floatV dx = camera.eye[0] - x.x, dy = camera.eye[1] - x.y, dz = camera.eye[2] - x.z;
+    floatV inv = 1.0f / sqrt(dx * dx + dy * dy + dz * dz);
+    wo = f3v(dx * inv, dy * inv, dz * inv);
   }
-  float3 wo;
-  if (camera.orthographic)
-    wo = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
-  else
-    wo = normalize(vload3(0, camera.eye) - p.xyz);
-  float3 E = probe_field_irradiance(&grid, irradiance, distance, p.xyz, gNormal[i].xyz, gGeoNormal[i].xyz, wo);
-  indirect[i] = (float4)(gAlbedo[i].xyz * GI_INV_PI * E, 0.0f);
+  float3V E = probe_field_irradianceV(&grid, (global const float*)irradiance, (global const float*)distance, x, n, ng, wo);
+  if (down == 1) {
+    alb = f3v(GI_GATHER(floatV, A, i4), GI_GATHER(floatV, A, i4 + 1), GI_GATHER(floatV, A, i4 + 2));
+    E = f3v(alb.x * GI_INV_PI * E.x, alb.y * GI_INV_PI * E.y, alb.z * GI_INV_PI * E.z);
+  }
+  intV surface = pw != 0.0f;
+  floatV zero = (floatV)(0.0f);
+  float tmp[4 * GI_VW];
+  floatV ox = GI_SEL(zero, E.x, surface), oy = GI_SEL(zero, E.y, surface), oz = GI_SEL(zero, E.z, surface);
+  GI_AOS4_STORE(tmp, ox, oy, oz, zero)
+  global float4* o = out + (size_t)v * lw + u0;
+  for (int l = 0; l < valid; ++l) o[l] = vload4(l, tmp);
 }

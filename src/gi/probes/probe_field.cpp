@@ -105,7 +105,10 @@ std::vector<glm::vec4> probeRayDirections(int rays, uint32_t update) {
 }
 
 ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& s)
-    : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce) {
+    : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce), downsample_(s.downsample) {
+  upsampleTest_.tauZ = s.tauZ;
+  upsampleTest_.tauNDegrees = s.tauNDegrees;
+  if (downsample_ > 1) upsampler_ = std::make_unique<GeometryAwareUpsampler>(ctx, "probes: upsample");
   bvh_ = std::make_unique<DeviceBvh>(ctx, scene, deviceScene);
   program_ = ctx.buildProgram("kernels/gi/probes/probes.cl",
                               {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)}});
@@ -155,12 +158,14 @@ void ProbeField::update(const DeviceScene& scene, float maxHysteresis) {
   size_t rays = probes * size_t(grid_.rays);
   ctx_.launch(trace_, cl::NDRange::d1(cl::roundUp(rays, 64), 64), "probes: trace rays");
 
-  size_t irr = probes * size_t(grid_.irradiance_res) * size_t(grid_.irradiance_res);
+  // The blend kernels take the vector width's worth of texels of one probe per work-item.
+  size_t vw = size_t(ctx_.vectorWidth());
+  auto items = [&](int res) { return probes * ((size_t(res) * size_t(res) + vw - 1) / vw); };
   blendIrradiance_.args(grid_, rayDirs_, rayResults_, hysteresis, irradiance_);
-  ctx_.launch(blendIrradiance_, cl::NDRange::d1(cl::roundUp(irr, 64), 64), "probes: blend irradiance");
-  size_t dist = probes * size_t(grid_.distance_res) * size_t(grid_.distance_res);
+  ctx_.launch(blendIrradiance_, cl::NDRange::d1(cl::roundUp(items(grid_.irradiance_res), 16), 16),
+              "probes: blend irradiance");
   blendDistance_.args(grid_, rayDirs_, rayResults_, hysteresis, distance_);
-  ctx_.launch(blendDistance_, cl::NDRange::d1(cl::roundUp(dist, 64), 64), "probes: blend distance");
+  ctx_.launch(blendDistance_, cl::NDRange::d1(cl::roundUp(items(grid_.distance_res), 16), 16), "probes: blend distance");
 
   size_t irrSide = size_t(grid_.irradiance_res + 2), distSide = size_t(grid_.distance_res + 2);
   borderIrradiance_.args(irradiance_, grid_.irradiance_res, int(probes));
@@ -171,8 +176,17 @@ void ProbeField::update(const DeviceScene& scene, float maxHysteresis) {
 }
 
 void ProbeField::shade(const GBuffer& g, cl::Buffer& indirect) {
-  shade_.args(grid_, irradiance_, distance_, g.view, g.position, g.geoNormal, g.normal, g.albedo, indirect);
-  ctx_.launch(shade_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4), "probes: shade");
+  int d = downsample_, lw = (g.width + d - 1) / d, lh = (g.height + d - 1) / d;
+  cl::Buffer* target = &indirect;
+  if (d > 1) {
+    if (!low_ || low_.bytes() != size_t(lw) * lh * 16)
+      low_ = cl::Buffer(ctx_, size_t(lw) * lh * 16, CL_MEM_READ_WRITE, "probes low-res irradiance");
+    target = &low_;
+  }
+  shade_.args(grid_, irradiance_, distance_, g.view, g.position, g.geoNormal, g.normal, g.albedo, d, *target);
+  int groups = (lw + ctx_.vectorWidth() - 1) / ctx_.vectorWidth();  // vector width's worth of pixels per item
+  ctx_.launch(shade_, cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(lh, 8), 8, 8), "probes: shade");
+  if (d > 1) upsampler_->run(g, low_, d, upsampleTest_, indirect);
 }
 
 }  // namespace gi

@@ -19,6 +19,7 @@
 #include <glm/glm.hpp>
 
 #include "cl/runtime.h"
+#include "gi/filters/discontinuity_filter.h"
 #include "kernels/gi/probes/probe_types.h"
 #include "raster/gbuffer.h"
 #include "reference/bvh.h"
@@ -39,6 +40,8 @@ struct ProbeSettings {
   float normalBias = 0.045f;     // fractions of the smallest probe spacing
   float viewBias = 0.18f;
   float maxDistance = 0.0f;      // metres; 0 = the scene's bounding-box diagonal
+  int downsample = 1;            // shade at 1/downsample resolution, then upsample geometry-aware
+  float tauZ = 0.05f, tauNDegrees = 25.0f;  // the upsampler's depth and normal tolerances
 };
 
 // The seed's Sponza layout generalised: 8 probes along the two longest axes of the scene bounds,
@@ -81,10 +84,13 @@ private:
   cl::Context& ctx_;
   GiProbeGrid grid_;
   bool multiBounce_;
+  int downsample_;
+  GeometryTest upsampleTest_;
   std::unique_ptr<DeviceBvh> bvh_;
+  std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   cl::Program program_;
   cl::Kernel trace_, blendIrradiance_, blendDistance_, borderIrradiance_, borderDistance_, shade_;
-  cl::Buffer irradiance_, distance_, rayDirs_, rayResults_, instanceEmits_;
+  cl::Buffer irradiance_, distance_, rayDirs_, rayResults_, instanceEmits_, low_;
   uint32_t updates_ = 0;
 };
 

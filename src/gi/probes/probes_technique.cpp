@@ -23,6 +23,9 @@ ProbeSettings probeSettings(const ParamSet& p) {
   s.normalBias = p.getFloat("probes.normal_bias");
   s.viewBias = p.getFloat("probes.view_bias");
   s.maxDistance = p.getFloat("probes.max_distance");
+  s.downsample = p.getInt("probes.downsample");
+  s.tauZ = p.getFloat("probes.tau_z");
+  s.tauNDegrees = p.getFloat("probes.tau_n");
   return s;
 }
 
@@ -76,6 +79,9 @@ TechniqueInfo probesTechniqueInfo() {
                         "smallest backface weight max(floor, n . direction to the probe) (seed 004 eq. 7 has 0)");
             p.addFloat("probes.normal_bias", 0.045, 0.0, 1.0, "visibility test point offset along the normal, fraction of the smallest probe spacing");
             p.addFloat("probes.view_bias", 0.18, 0.0, 1.0, "visibility test point offset towards the viewer, fraction of the smallest probe spacing");
+            p.addInt("probes.downsample", 1, 1, 4, "shade at 1/downsample resolution, then upsample geometry-aware");
+            p.addFloat("probes.tau_z", 0.05, 0.0, 10.0, "upsampling: relative view-depth tolerance");
+            p.addFloat("probes.tau_n", 25.0, 0.0, 180.0, "upsampling: geometric-normal tolerance in degrees");
             p.addFloat("probes.max_distance", 0.0, 0.0, 1e6, "probe ray length in metres; 0 = the scene's bounding-box diagonal");
           },
           [] { return std::make_unique<ProbesTechnique>(); }};

@@ -27,6 +27,12 @@ float radicalInverse(uint32_t i, uint32_t base) {
   return r;
 }
 
+// Both kernels take the vector width's worth of adjacent pixels of a row per work-item.
+cl::NDRange pixelGroups(const cl::Context& ctx, const GBuffer& g) {
+  int vw = ctx.vectorWidth(), groups = (g.width + vw - 1) / vw;
+  return cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(g.height, 8), 8, 8);
+}
+
 }  // namespace
 
 std::vector<float> ssaoKernelVectors(int samples) {
@@ -89,8 +95,7 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
   occlusionKernel_.args(g.width, g.height, g.view, g.position, g.geoNormal, g.normal, g.visibility.depth, f.direct,
                         kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), rawOcclusion_,
                         rawIrradiance_);
-  f.ctx.launch(occlusionKernel_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4),
-               "ssao: occlusion");
+  f.ctx.launch(occlusionKernel_, pixelGroups(f.ctx, g), "ssao: occlusion");
 }
 
 void SsaoTechnique::blurComposePass(const FrameResources& f, const SsaoSettings& s, bool upstream,
@@ -98,8 +103,7 @@ void SsaoTechnique::blurComposePass(const FrameResources& f, const SsaoSettings&
   const GBuffer& g = f.gbuffer;
   blurKernel_.args(g.width, g.height, g.visibility.depth, g.albedo, rawOcclusion_, rawIrradiance_, s.blurTau,
                    int(upstream), int(s.bleeding), occlusion_, indirect);
-  f.ctx.launch(blurKernel_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4),
-               "ssao: blur + compose");
+  f.ctx.launch(blurKernel_, pixelGroups(f.ctx, g), "ssao: blur + compose");
 }
 
 void SsaoTechnique::render(const FrameResources& f, cl::Buffer& indirect) {
