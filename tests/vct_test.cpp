@@ -331,29 +331,53 @@ TEST(VctVoxelize, ClosedMeshGivesClosedShell) {
   EXPECT_EQ(far, 0u);
 }
 
-TEST(VctInject, LitPlaneGetsAlbedoOverPiTimesIrradiance) {
-  // A horizontal quad, albedo (0.5, 0.6, 0.7), under a directional light of irradiance (2, 3, 4)
-  // at 60° from the normal; no shadow map. Every voxel it touches: L = ρ/π·E·cos θ, α = 1.
+namespace {
+
+// A horizontal 2 m × 2 m quad at height y with diffuse albedo rho, lit by a directional light
+// along sunDir of irradiance E on a plane facing it; no shadow map.
+Scene sunlitPlane(glm::vec3 rho, float y, glm::vec3 sunDir, glm::vec3 E) {
   Scene s;
   s.name = "plane";
-  s.materials.push_back(test::diffuseMaterial(0.5f, 0.6f, 0.7f));
-  glm::vec3 a(-1, 0.13f, -1), b(1, 0.13f, -1), c(1, 0.13f, 1), d(-1, 0.13f, 1);
+  s.materials.push_back(test::diffuseMaterial(rho.x, rho.y, rho.z));
+  glm::vec3 a(-1, y, -1), b(1, y, -1), c(1, y, 1), d(-1, y, 1);
   test::addTriangle(s, a, d, c, 0);
   test::addTriangle(s, a, c, b, 0);
   s.computeBounds();
-  s.bounds.extend(glm::vec3(0, 1, 0));
-  s.bounds.extend(glm::vec3(0, -1, 0));
   GiLight sun{};
   sun.type = GI_LIGHT_DIRECTIONAL;
-  glm::vec3 dir = glm::normalize(glm::vec3(std::sin(M_PI / 3), -std::cos(M_PI / 3), 0.0));
-  sun.direction[0] = dir.x;
-  sun.direction[1] = dir.y;
-  sun.direction[2] = dir.z;
-  sun.intensity[0] = 2;
-  sun.intensity[1] = 3;
-  sun.intensity[2] = 4;
+  glm::vec3 dir = glm::normalize(sunDir);
+  for (int k = 0; k < 3; ++k) {
+    sun.direction[k] = dir[k];
+    sun.intensity[k] = E[k];
+  }
   sun.shadow_map = -1;
   s.lights.push_back(sun);
+  return s;
+}
+
+// Sum over a 32×32 frame of vct's indirect radiance with the given parameters.
+double vctIndirectSum(const Scene& s, std::vector<std::string> sets) {
+  RenderSettings rs;
+  rs.width = 32;
+  rs.height = 32;
+  rs.technique = "vct";
+  rs.sets = std::move(sets);
+  Renderer r(test::context(), s, rs);
+  r.renderFrame();
+  double sum = 0;
+  for (float v : r.indirectRadiance().pixels) sum += v;
+  return sum;
+}
+
+}  // namespace
+
+TEST(VctInject, LitPlaneGetsAlbedoOverPiTimesIrradiance) {
+  // A horizontal quad, albedo (0.5, 0.6, 0.7), under a directional light of irradiance (2, 3, 4)
+  // at 60° from the normal; no shadow map. Every voxel it touches: L = ρ/π·E·cos θ, α = 1.
+  Scene s = sunlitPlane(glm::vec3(0.5f, 0.6f, 0.7f), 0.13f,
+                        glm::vec3(std::sin(M_PI / 3), -std::cos(M_PI / 3), 0.0), glm::vec3(2, 3, 4));
+  s.bounds.extend(glm::vec3(0, 1, 0));
+  s.bounds.extend(glm::vec3(0, -1, 0));
   cl::Context& ctx = test::context();
   DeviceScene ds(ctx, s);
   ShadowMapSet shadows;
@@ -562,23 +586,34 @@ TEST(Vct, EachBounceAddsOneSmallerOrderOfLight) {
   // bounce instead of the direct light (counting orders twice) would make the increments grow.
   Scene s = test::cornellWithSpot(true);
   std::vector<double> mean;
-  for (int bounces = 1; bounces <= 4; ++bounces) {
-    RenderSettings rs;
-    rs.width = 32;
-    rs.height = 32;
-    rs.technique = "vct";
-    rs.sets = {"vct.resolution=32", "vct.specular=0", "vct.bounces=" + std::to_string(bounces),
-               "shadow.resolution=256"};
-    Renderer r(test::context(), s, rs);
-    r.renderFrame();
-    double sum = 0;
-    for (float v : r.indirectRadiance().pixels) sum += v;
-    mean.push_back(sum);
-  }
+  for (int bounces = 1; bounces <= 4; ++bounces)
+    mean.push_back(vctIndirectSum(s, {"vct.resolution=32", "vct.specular=0", "vct.bounces=" + std::to_string(bounces),
+                                      "shadow.resolution=256"}));
   for (int k = 1; k < 4; ++k) {
     double inc = mean[k] - mean[k - 1];
     std::printf("bounces %d: indirect sum %.4f (+%.4f)\n", k + 1, mean[k], inc);
     EXPECT_GT(inc, 0.0) << "bounce " << k + 1;
     if (k > 1) EXPECT_LT(inc, mean[k - 1] - mean[k - 2]) << "bounce " << k + 1;
   }
+}
+
+TEST(VctCone, FootprintInFrontKeepsALitPlaneFromLightingItself) {
+  // A lone sunlit plane cannot light itself: the path tracer's indirect light on it is exactly 0.
+  // The cones' coarse samples reach back into the plane's own voxels (self-illumination: the
+  // default march gathers part of the plane's radiance); with vct.footprint_in_front the sampled
+  // footprint stays in front of the surface and gathers nothing.
+  Scene s = sunlitPlane(glm::vec3(0.8f), 0.0f, glm::vec3(0, -1, 0), glm::vec3(3.0f));
+  Camera cam;
+  cam.position = glm::vec3(0, 1.5f, 0.01f);
+  cam.target = glm::vec3(0, 0, 0);
+  cam.yfov = 0.9f;
+  s.cameras.push_back(cam);
+  double indirect[2];
+  for (int inFront = 0; inFront < 2; ++inFront)
+    indirect[inFront] = vctIndirectSum(s, {"vct.resolution=32", "vct.specular=0",
+                                           std::string("vct.footprint_in_front=") + (inFront ? "1" : "0")});
+  std::printf("lit plane, indirect light on itself (sum over the image): default %.4f, footprint in front %.6f\n",
+              indirect[0], indirect[1]);
+  EXPECT_GT(indirect[0], 1.0);
+  EXPECT_EQ(indirect[1], 0.0);
 }

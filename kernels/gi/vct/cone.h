@@ -9,6 +9,14 @@
 //   c += (1 − a)·c_s·α'/α,  a += (1 − a)·α';
 // the occlusion for ambient occlusion accumulates α' weighted by 1/(1 + λ·t) (λ per voxel).
 // The march stops at a ≥ 0.99, past max_distance, or when the cone has left the grid.
+// Footprint in front of the surface (vct.footprint_in_front): a cone leaving a surface samples, at
+// height h (voxels) above the surface's tangent plane, a cell of level log2(D) whose trilinear
+// stencil reaches cell centres up to D away; the cells holding the surface's own voxels (which
+// reach 1 voxel in front of the plane) have centres up to 1 + D/2 above it. Capping D at the
+// largest power of two ≤ (h − 1)/1.5 (so the quadrilinear blend takes no coarser level either) and
+// sampling nothing below h = 2.5, the surface neither lights nor occludes itself; the cone then
+// samples finer levels than its aperture near the surface (h = h0 + t·cos, cos = the cone axis'
+// cosine with the normal). h0 = ∞ turns this off.
 #pragma once
 #include "gi/vct/voxel_grid.h"
 
@@ -17,22 +25,34 @@ typedef struct {
   float occlusion;  // distance-weighted opacity for ambient occlusion
 } ConeResult;
 
+// Sampled diameter (voxels) at distance t: the cone's, at least one voxel, and (footprint in front)
+// at most the largest power of two ≤ (h − 1)/1.5, so that the quadrilinear lookup never blends in
+// a level coarser than that bound.
+inline float vct_footprint(float tanHalf, float t, float h0, float cosN) {
+  float bound = (h0 + t * cosN - 1.0f) * (1.0f / 1.5f);
+  float cap = bound >= 1.0f ? exp2(floor(log2(bound))) : 1.0f;
+  return fmax(1.0f, fmin(2.0f * tanHalf * t, cap));
+}
+
 inline ConeResult vct_cone(global const float4* iso, global const float4* aniso, int N, int levels, float3 o, float3 d,
-                           float tanHalf, float maxDistance, float stepFactor, float aoLambda, int anisotropic) {
+                           float tanHalf, float maxDistance, float stepFactor, float aoLambda, int anisotropic,
+                           float h0, float cosN) {
   ConeResult r;
   float3 c = (float3)(0.0f);
   float a = 0.0f, occ = 0.0f;
   float t = 0.0f;
   float limit = (float)N;
   for (;;) {
-    float diameter = fmax(1.0f, 2.0f * tanHalf * t);
+    float diameter = vct_footprint(tanHalf, t, h0, cosN);
     float step = fmax(0.5f, stepFactor * diameter);
     t += step;
     if (t > maxDistance) break;
     float3 p = o + d * t;
-    diameter = fmax(1.0f, 2.0f * tanHalf * t);
+    diameter = vct_footprint(tanHalf, t, h0, cosN);
     float margin = 0.5f * diameter;
     if (any(p < -margin) || any(p > limit + margin)) break;
+    // Footprint in front: below h = 2.5 voxels even level 0 would touch the surface's own voxels.
+    if (h0 + t * cosN - 1.0f < 1.5f) continue;
     float4 s = vox_sample(iso, aniso, N, levels, p, d, log2(diameter), anisotropic);
     if (s.w > 1e-6f) {
       float alpha = fmin(s.w, 1.0f);
@@ -87,7 +107,7 @@ constant float4 VCT_CONES[9] = {
 // starting start_offset voxels along n; w: ambient-occlusion visibility 1 − Σ (w_i/π)·occlusion_i.
 inline float4 vct_diffuse_irradiance(global const float4* iso, global const float4* aniso, int N, int levels,
                                      float3 p, float3 n, float startOffset, float maxDistance, float stepFactor,
-                                     float aoLambda, int anisotropic) {
+                                     float aoLambda, int anisotropic, int footprintInFront) {
   float3 t, b;
   orthonormal_basis(n, &t, &b);
   float3 o = p + n * startOffset;
@@ -97,7 +117,7 @@ inline float4 vct_diffuse_irradiance(global const float4* iso, global const floa
     float4 cone = VCT_CONES[i];
     float3 d = normalize(t * cone.x + b * cone.y + n * cone.z);
     ConeResult r = vct_cone(iso, aniso, N, levels, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
-                            anisotropic);
+                            anisotropic, footprintInFront ? startOffset : INFINITY, cone.z);
     E += cone.w * r.radiance.xyz;
     occlusion += cone.w * GI_INV_PI * r.occlusion;
   }

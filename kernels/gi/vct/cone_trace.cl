@@ -22,7 +22,8 @@ typedef struct {
   float aoLambda;     // AO distance falloff, per voxel
   int anisotropic;
   int applyAo;        // multiply the diffuse result by the voxel AO visibility
-  int pad[2];
+  int footprintInFront;  // keep the sampled footprint in front of the surface (cone.h)
+  int pad;
 } VctTraceParams;
 
 inline float3 vct_to_voxels(GiVoxelGrid g, float3 x) { return (x - vload3(0, g.origin)) / g.voxel_size; }
@@ -41,7 +42,7 @@ kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, global const float4
   }
   float4 e = vct_diffuse_irradiance(iso, aniso, grid.resolution, grid.levels, vct_to_voxels(grid, pos.xyz),
                                     gNormal[q].xyz, tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda,
-                                    tp.anisotropic);
+                                    tp.anisotropic, tp.footprintInFront);
   float3 E = tp.applyAo ? e.xyz * e.w : e.xyz;
 #if GI_DOWN == 1
   out[o] = (float4)(gAlbedo[q].xyz * GI_INV_PI * E, 0.0f);
@@ -68,7 +69,7 @@ kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, global const float
   float3 r = 2.0f * nv * n - wo;
   float tanHalf = ggx_alpha(spec.w);
   ConeResult c = vct_cone(iso, aniso, grid.resolution, grid.levels, vct_to_voxels(grid, pos.xyz) + n * tp.startOffset,
-                          r, tanHalf, tp.maxDistance, tp.stepFactor, tp.aoLambda, tp.anisotropic);
+                          r, tanHalf, tp.maxDistance, tp.stepFactor, tp.aoLambda, tp.anisotropic, tp.footprintInFront ? tp.startOffset : INFINITY, dot(r, n));
   out[i].xyz += fresnel_schlick(spec.xyz, nv) * c.radiance.xyz;
 }
 
@@ -84,7 +85,8 @@ kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* a
   }
   VoxelSurface s = vox_resolve(grid, acc, v);
   float4 e = vct_diffuse_irradiance(iso, aniso, N, grid.levels, vct_to_voxels(grid, s.position), s.normal,
-                                    tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda, tp.anisotropic);
+                                    tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda, tp.anisotropic,
+                                    tp.footprintInFront);
   level0Out[v] = own + (float4)(s.albedo * GI_INV_PI * e.xyz * s.alpha, 0.0f);
 }
 
@@ -97,7 +99,7 @@ kernel void vct_trace_cones(GiVoxelGrid grid, VctTraceParams tp, global const fl
   if (i >= count) return;
   float4 c = cones[i], d = dirs[i];
   ConeResult r = vct_cone(iso, aniso, grid.resolution, grid.levels, c.xyz, d.xyz, c.w, d.w, tp.stepFactor,
-                          tp.aoLambda, tp.anisotropic);
+                          tp.aoLambda, tp.anisotropic, INFINITY, 0.0f);
   out[i] = r.radiance;
   occlusion[i] = r.occlusion;
 }

@@ -17,7 +17,7 @@ namespace {
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
 struct VctTraceParams {
   float startOffset, maxDistance, stepFactor, aoLambda;
-  int32_t anisotropic, applyAo, pad[2];
+  int32_t anisotropic, applyAo, footprintInFront, pad;
 };
 static_assert(sizeof(VctTraceParams) == 32, "VctTraceParams layout");
 
@@ -54,6 +54,7 @@ public:
     tp.aoLambda = p.getFloat("vct.ao_lambda") * s;
     tp.anisotropic = anisotropic ? 1 : 0;
     tp.applyAo = p.getChoice("vct.ao") == "voxel" ? 1 : 0;
+    tp.footprintInFront = p.getBool("vct.footprint_in_front") ? 1 : 0;
 
     if (!voxelized_ || !p.getBool("vct.static")) {
       voxels_->voxelize(f.deviceScene);
@@ -126,6 +127,10 @@ TechniqueInfo vctTechniqueInfo() {
             p.addFloat("vct.step_factor", 0.5, 0.05, 4.0, "march step as a fraction of the cone diameter (at least ½ voxel)");
             p.addFloat("vct.max_distance", 1.0, 0.01, 2.0, "maximum cone length as a fraction of the grid edge");
             p.addBool("vct.specular", true, "trace one specular cone per pixel (aperture tan θ = GGX α)");
+            p.addBool("vct.footprint_in_front", false,
+                      "cap the sampled diameter (power of two <= (h - 1)/1.5 voxels, h = height above the surface, "
+                      "nothing below h = 2.5) so cones never sample the surface they start from; "
+                      "docs/techniques/vct.md has its measured effect");
             p.addChoice("vct.ao", "off", {"off", "voxel"}, "voxel ambient occlusion: multiply the diffuse indirect light by it");
             p.addFloat("vct.ao_lambda", 1.0, 0.0, 1000.0, "AO distance falloff 1/(1 + λ·d), λ per metre");
             p.addInt("vct.bounces", 1, 1, 8,
