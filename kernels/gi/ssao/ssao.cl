@@ -66,11 +66,24 @@ inline void ssao_store1(global float* plane, int i, int valid, floatV v) {
   }
 }
 
+// The tangent plane of the surface seen at each pixel, (n_g, n_g · Q), so that the occlusion test
+// of a sample reads one float4 instead of the position and the normal (background: all 0, which
+// never occludes since the bias is positive).
+kernel void ssao_planes(int count, global const float4* position, global const float4* geoNormal,
+                        global float4* planes) {
+  int i = get_global_id(0);
+  if (i >= count) return;
+  float4 p = position[i];
+  float3 n = geoNormal[i].xyz;
+  planes[i] = p.w != 0.0f ? (float4)(n, dot(n, p.xyz)) : (float4)(0.0f);
+}
+
 // kernelVectors: GI_SSAO_SAMPLES float4 (tangent-space x, y, z along n_g, already scaled by the
-// length factor lerp(0.1, 1, (i/N)²)); rotations: 16 float2 (cos, sin) for the 4×4 noise tile.
+// length factor lerp(0.1, 1, (i/N)²)); rotations: 16 float2 (cos, sin) for the 4×4 noise tile;
+// planes: ssao_planes().
 kernel void ssao_occlusion(int width, int height, GiView camera, global const float4* position,
                            global const float4* geoNormal, global const float4* normal,
-                           global const float* depth, global const float4* direct,
+                           global const float4* planes, global const float* depth, global const float4* direct,
                            constant float4* kernelVectors, constant float2* rotations, float radius,
                            float bias, int bleeding, global float* occlusionOut,
                            global float4* irradianceOut) {
@@ -100,7 +113,7 @@ kernel void ssao_occlusion(int width, int height, GiView camera, global const fl
   const float* M = camera.view_proj;
   const float W = (float)width, H = (float)height;
   global const float* pos = (global const float*)position;
-  global const float* geo = (global const float*)geoNormal;
+  global const float* pl = (global const float*)planes;
   global const float* nrm = (global const float*)normal;
   global const float* dir = (global const float*)direct;
   floatV occluded = (floatV)(0.0f), Ex = (floatV)(0.0f), Ey = (floatV)(0.0f), Ez = (floatV)(0.0f);
@@ -120,14 +133,15 @@ kernel void ssao_occlusion(int width, int height, GiView camera, global const fl
     intV q = GI_SEL((intV)(0), convert_intV(GI_SEL((floatV)(0.0f), sy, ok)) * width +
                                    convert_intV(GI_SEL((floatV)(0.0f), sx, ok)), ok);
     intV q4 = q * 4;
-    floatV Qx = GI_GATHER(floatV, pos, q4), Qy = GI_GATHER(floatV, pos, q4 + 1), Qz = GI_GATHER(floatV, pos, q4 + 2);
-    floatV qx = GI_GATHER(floatV, geo, q4), qy = GI_GATHER(floatV, geo, q4 + 1), qz = GI_GATHER(floatV, geo, q4 + 2);
+    floatV qx = GI_GATHER(floatV, pl, q4), qy = GI_GATHER(floatV, pl, q4 + 1), qz = GI_GATHER(floatV, pl, q4 + 2),
+           qd = GI_GATHER(floatV, pl, q4 + 3);
     floatV zq = GI_GATHER(floatV, depth, q);
     // Background at q: its depth is infinite and fails the range check.
-    floatV behind = (Sx - Qx) * qx + (Sy - Qy) * qy + (Sz - Qz) * qz;
+    floatV behind = Sx * qx + Sy * qy + Sz * qz - qd;  // (S − Q) · n_q
     intV occ = ok & (behind < -bias) & (fabs(zq - zP) < radius);
     occluded += GI_SEL((floatV)(0.0f), (floatV)(1.0f), occ);
     if (bleeding && GI_ANY(occ)) {
+      floatV Qx = GI_GATHER(floatV, pos, q4), Qy = GI_GATHER(floatV, pos, q4 + 1), Qz = GI_GATHER(floatV, pos, q4 + 2);
       floatV vx = Qx - Px, vy = Qy - Py, vz = Qz - Pz;
       floatV d2 = vx * vx + vy * vy + vz * vz;
       floatV invD = rsqrt(fmax(d2, 1e-30f));

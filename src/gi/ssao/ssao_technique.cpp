@@ -78,6 +78,7 @@ SsaoSettings ssaoSettings(const ParamSet& p, const Bounds& bounds, bool upstream
 void SsaoTechnique::setup(const FrameResources& f) {
   size_t n = size_t(f.gbuffer.width) * f.gbuffer.height;
   rawOcclusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao raw occlusion");
+  planes_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "ssao tangent planes");
   rawIrradiance_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "ssao raw bleeding irradiance");
   occlusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao occlusion");
   rotations_ = f.ctx.upload(ssaoRotations(), "ssao rotations");
@@ -88,11 +89,15 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
     program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)}});
     occlusionKernel_ = program_.kernel("ssao_occlusion");
     blurKernel_ = program_.kernel("ssao_blur_compose");
+    planesKernel_ = program_.kernel("ssao_planes");
     kernelVectors_ = f.ctx.upload(ssaoKernelVectors(s.samples), "ssao kernel vectors");
     programSamples_ = s.samples;
   }
   const GBuffer& g = f.gbuffer;
-  occlusionKernel_.args(g.width, g.height, g.view, g.position, g.geoNormal, g.normal, g.visibility.depth, f.direct,
+  int pixels = g.width * g.height;
+  planesKernel_.args(pixels, g.position, g.geoNormal, planes_);
+  f.ctx.launch(planesKernel_, cl::NDRange::d1(cl::roundUp(pixels, 64), 64), "ssao: planes");
+  occlusionKernel_.args(g.width, g.height, g.view, g.position, g.geoNormal, g.normal, planes_, g.visibility.depth, f.direct,
                         kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), rawOcclusion_,
                         rawIrradiance_);
   f.ctx.launch(occlusionKernel_, pixelGroups(f.ctx, g), "ssao: occlusion");

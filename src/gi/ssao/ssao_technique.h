@@ -52,8 +52,8 @@ public:
 
 private:
   cl::Program program_;
-  cl::Kernel occlusionKernel_, blurKernel_;
-  cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_;
+  cl::Kernel occlusionKernel_, blurKernel_, planesKernel_;
+  cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_, planes_;
   int programSamples_ = 0;
 };
 
