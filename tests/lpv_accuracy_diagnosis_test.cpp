@@ -145,30 +145,46 @@ TEST(LpvAccuracyDiagnosis, DISABLED_Sponza) {
   diagnose(*sponza, "sponza", 96, 54, {"rsm.resolution=256"});
 }
 
-TEST(LpvAccuracyDiagnosis, DISABLED_FullCornellBoxVariants) {
-  Scene s = test::cornellWithSpot(true);
+// SSIM of direct + LPV against the full reference and the LPV indirect against the one-bounce
+// reference for each parameter set (extra settings appended to `common`).
+void variants(const Scene& s, const std::string& tag, int w, int h, const std::vector<std::string>& common,
+              const std::vector<std::vector<std::string>>& sets) {
   int spp = envInt("GI_DIAG_SPP", 256), sppHi = std::max(spp, envInt("GI_DIAG_SPP_HI", 0));
-  const std::vector<std::vector<std::string>> variants = {
-      {"lpv.resolution=32", "lpv.iterations=32"},   {"lpv.resolution=32", "lpv.iterations=64"},
-      {"lpv.resolution=32", "lpv.iterations=256"},  {"lpv.resolution=16", "lpv.iterations=16"},
-      {"lpv.resolution=16", "lpv.iterations=32"},   {"lpv.resolution=16", "lpv.iterations=64"},
-      {"lpv.resolution=16", "lpv.iterations=256"},  {"lpv.resolution=64", "lpv.iterations=64"},
-      {"lpv.resolution=64", "lpv.iterations=256"},  {"lpv.resolution=16", "lpv.iterations=64", "lpv.occlusion=0"},
-      {"lpv.resolution=32", "lpv.iterations=32", "lpv.injection_bias=0"},
-      {"lpv.resolution=32", "lpv.iterations=32", "lpv.injection_bias=1"},
-  };
-  for (std::vector<std::string> v : variants) {
+  for (std::vector<std::string> v : sets) {
     std::string label;
     for (const std::string& x : v) label += x + " ";
-    v.push_back("lpv.cascades=0");
-    Frame f = renderLpv(s, 128, 128, v);
-    Image rFull = reference(s, "cornell_blocks", f.camera, 128, 128, ReferenceMode::Full, sppHi, sppHi > spp ? 3 : 1);
-    Image rOneBounce = reference(s, "cornell_blocks", f.camera, 128, 128, ReferenceMode::OneBounce, spp, 1);
-    std::printf("%s: SSIM(D+I vs Rfull %d spp) %.4f, I/R1b %.3f (quarters%s), relMSE(I vs R1b) %.3f\n", label.c_str(),
-                sppHi, ssimOf(rFull, sum(f.direct, f.indirect), s.exposure),
+    v.insert(v.end(), common.begin(), common.end());
+    Frame f = renderLpv(s, w, h, v);
+    Image rFull = reference(s, tag, f.camera, w, h, ReferenceMode::Full, sppHi, sppHi > spp ? 3 : 1);
+    Image rOneBounce = reference(s, tag, f.camera, w, h, ReferenceMode::OneBounce, spp, 1);
+    std::printf("[%s] %s: SSIM(D+I vs Rfull %d spp) %.4f, I/R1b %.3f (quarters%s), relMSE(I vs R1b) %.3f\n",
+                tag.c_str(), label.c_str(), sppHi, ssimOf(rFull, sum(f.direct, f.indirect), s.exposure),
                 test::meanOf(f.indirect) / test::meanOf(rOneBounce), quarterRatios(f.indirect, rOneBounce).c_str(),
                 metrics::relMse(rOneBounce, f.indirect));
   }
+}
+
+TEST(LpvAccuracyDiagnosis, DISABLED_FullCornellBoxVariants) {
+  variants(test::cornellWithSpot(true), "cornell_blocks", 128, 128, {"lpv.cascades=0"},
+           {{"lpv.resolution=32", "lpv.iterations=32"}, {"lpv.resolution=32", "lpv.iterations=64"},
+            {"lpv.resolution=32", "lpv.iterations=256"}, {"lpv.resolution=16", "lpv.iterations=16"},
+            {"lpv.resolution=16", "lpv.iterations=32"}, {"lpv.resolution=16", "lpv.iterations=64"},
+            {"lpv.resolution=16", "lpv.iterations=256"}, {"lpv.resolution=64", "lpv.iterations=64"},
+            {"lpv.resolution=64", "lpv.iterations=256"}, {"lpv.resolution=16", "lpv.iterations=64", "lpv.occlusion=0"},
+            {"lpv.resolution=32", "lpv.iterations=32", "lpv.injection_bias=0"},
+            {"lpv.resolution=32", "lpv.iterations=32", "lpv.injection_bias=1"}});
+}
+
+// One grid over the whole scene at 32³, 64³, 128³ (does a fine grid carry the light far enough?)
+// and the default cascades.
+TEST(LpvAccuracyDiagnosis, DISABLED_SponzaVariants) {
+  std::string why;
+  std::optional<Scene> sponza = test::loadSponza(why);
+  if (!sponza) GTEST_SKIP() << why;
+  variants(*sponza, "sponza", 96, 54, {"rsm.resolution=256"},
+           {{"lpv.cascades=3", "lpv.resolution=32"}, {"lpv.cascades=0", "lpv.resolution=32"},
+            {"lpv.cascades=0", "lpv.resolution=64"}, {"lpv.cascades=0", "lpv.resolution=128"},
+            {"lpv.cascades=0", "lpv.resolution=128", "lpv.iterations=256"}});
 }
 
 }  // namespace
