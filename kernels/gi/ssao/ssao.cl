@@ -66,16 +66,43 @@ inline void ssao_store1(global float* plane, int i, int valid, floatV v) {
   }
 }
 
-// The tangent plane of the surface seen at each pixel, (n_g, n_g · Q), so that the occlusion test
-// of a sample reads one float4 instead of the position and the normal (background: all 0, which
-// never occludes since the bias is positive).
+// What the occlusion test of a sample needs about the surface seen at a pixel, in one float4 so
+// that a sample costs one gather: the octahedral coordinates of its geometric normal n (seed 004
+// Algorithm 1; decoded exactly enough in float), its tangent plane offset n·Q with the decoded n,
+// and its view depth. Background: depth +inf (fails every range check).
+inline float2 ssao_oct_encode(float3 v) {
+  float2 p = v.xy / (fabs(v.x) + fabs(v.y) + fabs(v.z));
+  if (v.z < 0.0f) p = (float2)((1.0f - fabs(p.y)) * (p.x >= 0.0f ? 1.0f : -1.0f), (1.0f - fabs(p.x)) * (p.y >= 0.0f ? 1.0f : -1.0f));
+  return p;
+}
+
+inline void ssao_oct_decodeV(floatV ox, floatV oy, floatV* nx, floatV* ny, floatV* nz) {
+  floatV z = 1.0f - fabs(ox) - fabs(oy);
+  floatV one = (floatV)(1.0f), minusOne = (floatV)(-1.0f);
+  intV lower = z < 0.0f;
+  floatV x = GI_SEL(ox, (1.0f - fabs(oy)) * GI_SEL(minusOne, one, ox >= 0.0f), lower);
+  floatV y = GI_SEL(oy, (1.0f - fabs(ox)) * GI_SEL(minusOne, one, oy >= 0.0f), lower);
+  floatV inv = 1.0f / sqrt(x * x + y * y + z * z);
+  *nx = x * inv;
+  *ny = y * inv;
+  *nz = z * inv;
+}
+
+// One pixel per work-item and no loop: PoCL vectorizes it across work-items.
 kernel void ssao_planes(int count, global const float4* position, global const float4* geoNormal,
-                        global float4* planes) {
+                        global const float* depth, global float4* planes) {
   int i = get_global_id(0);
   if (i >= count) return;
   float4 p = position[i];
-  float3 n = geoNormal[i].xyz;
-  planes[i] = p.w != 0.0f ? (float4)(n, dot(n, p.xyz)) : (float4)(0.0f);
+  float2 o = ssao_oct_encode(geoNormal[i].xyz);
+  floatV nx, ny, nz;
+  ssao_oct_decodeV((floatV)(o.x), (floatV)(o.y), &nx, &ny, &nz);  // the n the samples will see
+  float t[3 * GI_VW];
+  vstoreV(nx, 0, t);
+  vstoreV(ny, 1, t);
+  vstoreV(nz, 2, t);
+  float3 n = (float3)(t[0], t[GI_VW], t[2 * GI_VW]);
+  planes[i] = p.w != 0.0f ? (float4)(o, dot(n, p.xyz), depth[i]) : (float4)(0.0f, 0.0f, 0.0f, INFINITY);
 }
 
 // kernelVectors: GI_SSAO_SAMPLES float4 (tangent-space x, y, z along n_g, already scaled by the
@@ -133,9 +160,9 @@ kernel void ssao_occlusion(int width, int height, GiView camera, global const fl
     intV q = GI_SEL((intV)(0), convert_intV(GI_SEL((floatV)(0.0f), sy, ok)) * width +
                                    convert_intV(GI_SEL((floatV)(0.0f), sx, ok)), ok);
     intV q4 = q * 4;
-    floatV qx = GI_GATHER(floatV, pl, q4), qy = GI_GATHER(floatV, pl, q4 + 1), qz = GI_GATHER(floatV, pl, q4 + 2),
-           qd = GI_GATHER(floatV, pl, q4 + 3);
-    floatV zq = GI_GATHER(floatV, depth, q);
+    floatV qx, qy, qz;
+    ssao_oct_decodeV(GI_GATHER(floatV, pl, q4), GI_GATHER(floatV, pl, q4 + 1), &qx, &qy, &qz);
+    floatV qd = GI_GATHER(floatV, pl, q4 + 2), zq = GI_GATHER(floatV, pl, q4 + 3);
     // Background at q: its depth is infinite and fails the range check.
     floatV behind = Sx * qx + Sy * qy + Sz * qz - qd;  // (S − Q) · n_q
     intV occ = ok & (behind < -bias) & (fabs(zq - zP) < radius);

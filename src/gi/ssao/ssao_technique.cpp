@@ -95,7 +95,7 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
   }
   const GBuffer& g = f.gbuffer;
   int pixels = g.width * g.height;
-  planesKernel_.args(pixels, g.position, g.geoNormal, planes_);
+  planesKernel_.args(pixels, g.position, g.geoNormal, g.visibility.depth, planes_);
   f.ctx.launch(planesKernel_, cl::NDRange::d1(cl::roundUp(pixels, 64), 64), "ssao: planes");
   occlusionKernel_.args(g.width, g.height, g.view, g.position, g.geoNormal, g.normal, planes_, g.visibility.depth, f.direct,
                         kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), rawOcclusion_,
