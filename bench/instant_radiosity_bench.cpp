@@ -1,11 +1,11 @@
-// Instant radiosity benchmark (issue 4, item 5): per-kernel device milliseconds (medians over
-// frames after warm-up) of the `vpl`, `igi` and `rsm` techniques, the gather rate in pixel·VPL
+// Instant radiosity benchmark (issues 4 and 5, speed items): per-kernel device milliseconds (medians
+// over frames after warm-up) of the `vpl`, `igi`, `rsm`, `splat` and `sh-igi` techniques, the gather rate in pixel·VPL
 // pairs per second, and the d_min bias (energy lost by the clamp vs d_min → 0). Sponza 640×360
 // with its sun when the media are present, else the built-in Cornell box. Not a test: the
 // machine is noisy; docs/PERFORMANCE.md records the numbers.
 //
 //   build/instant_radiosity_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 9]
-//                                 [--only vpl|igi|rsm|splat]
+//                                 [--only vpl|igi|rsm|splat|sh-igi]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
     else if (k == "--frames") a.frames = std::stoi(next());
     else if (k == "--only") a.only = next();
     else {
-      std::fprintf(stderr, "usage: instant_radiosity_bench [--scene S] [--width W --height H] [--frames N] [--only vpl|igi|rsm|splat]\n");
+      std::fprintf(stderr, "usage: instant_radiosity_bench [--scene S] [--width W --height H] [--frames N] [--only vpl|igi|rsm|splat|sh-igi]\n");
       return 2;
     }
   }
@@ -96,6 +96,8 @@ int main(int argc, char** argv) {
       bench(ctx, scene, a, "splat", {"splat.count=256"}, "splat, N=256, default epsilon 1/256");
       bench(ctx, scene, a, "splat", {"splat.count=256", "splat.epsilon=1e-4"}, "splat, N=256, epsilon 1e-4");
     }
+    if (want("sh-igi"))
+      bench(ctx, scene, a, "sh-igi", {"sh-igi.count=256"}, "sh-igi 4x4, N=256, 27-channel filter 4x4, glossy");
     if (!want("vpl")) return 0;
     // d_min bias: mean indirect with the default clamp vs a clamp 100x smaller (≈ no clamp).
     double withClamp = meanIndirect(ctx, scene, a, {"vpl.count=256"});

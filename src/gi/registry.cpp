@@ -3,6 +3,7 @@
 #include "gi/vpl/techniques.h"
 #include "gi/rsm/rsm_technique.h"
 #include "gi/splat/splat_technique.h"
+#include "gi/sh_igi/sh_igi_technique.h"
 #include "gi/lpv/lpv_technique.h"
 #include "gi/vct/vct_technique.h"
 #include "gi/ssao/ssao_technique.h"
@@ -17,6 +18,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       igiTechniqueInfo(),
       rsmTechniqueInfo(),
       splatTechniqueInfo(),
+      shIgiTechniqueInfo(),
       lpvTechniqueInfo(),
       vctTechniqueInfo(),
       ssaoTechniqueInfo(),

@@ -42,6 +42,10 @@ public:
   // (`--technique lpv+ssao`) and rewrites it in place; a source technique overwrites it and must
   // come first. See Renderer and docs/RENDERING.md ("Technique chains").
   virtual bool modifiesIndirect() const { return false; }
+  // True when the technique's output already holds the direct light of the punctual lights
+  // (sh-igi.direct=vpl): the renderer then adds only the surfaces' emission to it, not the
+  // rasterized direct pass. Only the first technique of a chain is asked.
+  virtual bool deliversDirectLight(const ParamSet& params) const { return false; }
   // Builds programs and allocates buffers; called once before the first frame.
   virtual void setup(const FrameResources& frame) {}
   // Writes indirect radiance for every camera pixel into `indirect` (float4 per pixel); a

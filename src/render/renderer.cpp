@@ -129,7 +129,10 @@ PassTimes Renderer::renderFrame() {
   if (!chain_.empty()) {
     for (size_t i = 0; i < chain_.size(); ++i) chain_[i]->render(frameResources(i > 0), indirect_);
     uint32_t n = uint32_t(width_) * height_;
-    composeKernel_.args(direct_, indirect_, final_, n);
+    // A technique delivering the direct light itself gets only the emission added (the
+    // rasterized direct image stays available through directRadiance()).
+    const cl::Buffer& base = chain_.front()->deliversDirectLight(params_) ? gbuffer_.emission : direct_;
+    composeKernel_.args(base, indirect_, final_, n);
     ctx_.launch(composeKernel_, cl::NDRange::d1(n, 256), "compose");
   }
   return ctx_.profiler().collect();
