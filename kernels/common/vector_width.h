@@ -50,6 +50,37 @@ typedef ulong16 ulongV;
     vstore16((float16)(X.sc, Y.sc, Z.sc, W.sc, X.sd, Y.sd, Z.sd, W.sd, X.se, Y.se, Z.se, W.se, X.sf, Y.sf,   \
                        Z.sf, W.sf), 3, p);                                                                   \
   }
+// Four consecutive 32-bit words per lane (T = float, int or uint; p a pointer to T; i the lanes'
+// element offsets) -> four T##16 planes X, Y, Z, W (word 0..3): one 128-bit load per lane and
+// the transposition of GI_AOS4_LOAD, instead of four scalar gathers (64 loads with as many
+// element inserts, the cost that dominated the resolve and gather passes).
+#define GI_GATHER_SPAN4(T, p, i, X, Y, Z, W)                                                                 \
+  {                                                                                                          \
+    T##16 a_ = (T##16)(vload4(0, (p) + (i).s0), vload4(0, (p) + (i).s1), vload4(0, (p) + (i).s2),           \
+                       vload4(0, (p) + (i).s3));                                                             \
+    T##16 b_ = (T##16)(vload4(0, (p) + (i).s4), vload4(0, (p) + (i).s5), vload4(0, (p) + (i).s6),           \
+                       vload4(0, (p) + (i).s7));                                                             \
+    T##16 c_ = (T##16)(vload4(0, (p) + (i).s8), vload4(0, (p) + (i).s9), vload4(0, (p) + (i).sa),           \
+                       vload4(0, (p) + (i).sb));                                                             \
+    T##16 d_ = (T##16)(vload4(0, (p) + (i).sc), vload4(0, (p) + (i).sd), vload4(0, (p) + (i).se),           \
+                       vload4(0, (p) + (i).sf));                                                             \
+    X = (T##16)(a_.s048c, b_.s048c, c_.s048c, d_.s048c);                                                     \
+    Y = (T##16)(a_.s159d, b_.s159d, c_.s159d, d_.s159d);                                                     \
+    Z = (T##16)(a_.s26ae, b_.s26ae, c_.s26ae, d_.s26ae);                                                     \
+    W = (T##16)(a_.s37bf, b_.s37bf, c_.s37bf, d_.s37bf);                                                     \
+  }
+// Two consecutive words per lane: one 64-bit load per lane.
+#define GI_GATHER_SPAN2(T, p, i, X, Y)                                                                       \
+  {                                                                                                          \
+    T##16 a_ = (T##16)(vload2(0, (p) + (i).s0), vload2(0, (p) + (i).s1), vload2(0, (p) + (i).s2),           \
+                       vload2(0, (p) + (i).s3), vload2(0, (p) + (i).s4), vload2(0, (p) + (i).s5),           \
+                       vload2(0, (p) + (i).s6), vload2(0, (p) + (i).s7));                                    \
+    T##16 b_ = (T##16)(vload2(0, (p) + (i).s8), vload2(0, (p) + (i).s9), vload2(0, (p) + (i).sa),           \
+                       vload2(0, (p) + (i).sb), vload2(0, (p) + (i).sc), vload2(0, (p) + (i).sd),           \
+                       vload2(0, (p) + (i).se), vload2(0, (p) + (i).sf));                                    \
+    X = (T##16)(a_.even, b_.even);                                                                           \
+    Y = (T##16)(a_.odd, b_.odd);                                                                             \
+  }
 #elif GI_VW == 8
 typedef float8 floatV;
 typedef int8 intV;
@@ -85,6 +116,25 @@ typedef ulong8 ulongV;
     vstore16((float16)(X.s4, Y.s4, Z.s4, W.s4, X.s5, Y.s5, Z.s5, W.s5, X.s6, Y.s6, Z.s6, W.s6, X.s7, Y.s7,   \
                        Z.s7, W.s7), 1, p);                                                                   \
   }
+#define GI_GATHER_SPAN4(T, p, i, X, Y, Z, W)                                                         \
+  {                                                                                                  \
+    T##16 a_ = (T##16)(vload4(0, (p) + (i).s0), vload4(0, (p) + (i).s1), vload4(0, (p) + (i).s2),   \
+                       vload4(0, (p) + (i).s3));                                                     \
+    T##16 b_ = (T##16)(vload4(0, (p) + (i).s4), vload4(0, (p) + (i).s5), vload4(0, (p) + (i).s6),   \
+                       vload4(0, (p) + (i).s7));                                                     \
+    X = (T##8)(a_.s048c, b_.s048c);                                                                  \
+    Y = (T##8)(a_.s159d, b_.s159d);                                                                  \
+    Z = (T##8)(a_.s26ae, b_.s26ae);                                                                  \
+    W = (T##8)(a_.s37bf, b_.s37bf);                                                                  \
+  }
+#define GI_GATHER_SPAN2(T, p, i, X, Y)                                                               \
+  {                                                                                                  \
+    T##16 a_ = (T##16)(vload2(0, (p) + (i).s0), vload2(0, (p) + (i).s1), vload2(0, (p) + (i).s2),   \
+                       vload2(0, (p) + (i).s3), vload2(0, (p) + (i).s4), vload2(0, (p) + (i).s5),   \
+                       vload2(0, (p) + (i).s6), vload2(0, (p) + (i).s7));                            \
+    X = a_.even;                                                                                     \
+    Y = a_.odd;                                                                                      \
+  }
 #elif GI_VW == 1
 typedef float floatV;
 typedef int intV;
@@ -114,9 +164,28 @@ typedef ulong ulongV;
   }
 #define GI_AOS4_STORE(p, X, Y, Z, W) \
   { vstore4((float4)(X, Y, Z, W), 0, p); }
+#define GI_GATHER_SPAN4(T, p, i, X, Y, Z, W) \
+  {                                          \
+    T##4 v_ = vload4(0, (p) + (i));          \
+    X = v_.x;                                \
+    Y = v_.y;                                \
+    Z = v_.z;                                \
+    W = v_.w;                                \
+  }
+#define GI_GATHER_SPAN2(T, p, i, X, Y) \
+  {                                    \
+    T##2 v_ = vload2(0, (p) + (i));    \
+    X = v_.x;                          \
+    Y = v_.y;                          \
+  }
 #else
 #error "GI_VW must be 1, 8 or 16"
 #endif
+
+// Per-lane records of 4 (or 2) words: record i of p (float4/int4/uint4 or float2 arrays viewed
+// as T arrays) -> planes X, Y, Z, W (word 0..3).
+#define GI_GATHER_AOS4(T, p, i, X, Y, Z, W) GI_GATHER_SPAN4(T, p, ((i) * 4), X, Y, Z, W)
+#define GI_GATHER_AOS2(T, p, i, X, Y) GI_GATHER_SPAN2(T, p, ((i) * 2), X, Y)
 
 // Lane-wise helpers (structure of arrays). GI_SEL(a, b, c): b where c is true, else a.
 #if GI_VW == 1

@@ -23,10 +23,11 @@ typedef struct {
 inline float4V sample_textureV(global const GiTexture* table, global const uchar4* texels, intV index, floatV u,
                                floatV v, floatV lod) {
   global const int* tab = (global const int*)table;
-  intV ti = max(index, 0) * 8;  // GiTexture is 8 ints
-  uintV offset = as_uintV(GI_GATHER(intV, tab, ti));
-  intV w = GI_GATHER(intV, tab, ti + 1), h = GI_GATHER(intV, tab, ti + 2);
-  intV levels = GI_GATHER(intV, tab, ti + 3), srgb = GI_GATHER(intV, tab, ti + 4);
+  intV ti = max(index, 0) * 8;  // GiTexture is 8 ints: offset, width, height, levels, srgb, pad
+  intV offsetBits, w, h, levels;
+  GI_GATHER_SPAN4(int, tab, ti, offsetBits, w, h, levels)
+  uintV offset = as_uintV(offsetBits);
+  intV srgb = GI_GATHER(intV, tab, ti + 4);
   intV level = clamp(convert_intV(lod + 0.5f), 0, levels - 1);
   // Level offsets: step every lane up to the largest level among the lanes.
   int top = 0;
@@ -101,17 +102,24 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
   SurfaceV out;
   // Background lanes take triangle 0 for the gathers (their results are discarded).
   uintV tg = GI_SEL((uintV)(0), t, surface);
+  // Records of 4 words (triangles, positions, normals, tangents, materials) are fetched with one
+  // 128-bit load per lane (GI_GATHER_AOS4), uvs with one 64-bit load.
   global const uint* triU = (global const uint*)triangles;
-  uintV t4 = tg * 4u;
-  uintV i0 = GI_GATHER(uintV, triU, t4), i1 = GI_GATHER(uintV, triU, t4 + 1u), i2 = GI_GATHER(uintV, triU, t4 + 2u);
-  uintV mat = GI_GATHER(uintV, triU, t4 + 3u);
-#define GI_FETCH3(buf, idx) \
-  f3v(GI_GATHER(floatV, buf, (idx) * 4u), GI_GATHER(floatV, buf, (idx) * 4u + 1u), GI_GATHER(floatV, buf, (idx) * 4u + 2u))
+  uintV i0, i1, i2, mat;
+  GI_GATHER_AOS4(uint, triU, tg, i0, i1, i2, mat)
+#define GI_FETCH3(out, buf, idx)                              \
+  {                                                           \
+    floatV w_;                                                \
+    GI_GATHER_AOS4(float, buf, idx, out.x, out.y, out.z, w_) \
+  }
   global const float* posF = (global const float*)positions;
   global const float* nrmF = (global const float*)normals;
   global const float* tanF = (global const float*)tangents;
   global const float* uvF = (global const float*)uvs;
-  float3V p0 = GI_FETCH3(posF, i0), p1 = GI_FETCH3(posF, i1), p2 = GI_FETCH3(posF, i2);
+  float3V p0, p1, p2;
+  GI_FETCH3(p0, posF, i0)
+  GI_FETCH3(p1, posF, i1)
+  GI_FETCH3(p2, posF, i2)
 
   // view_pixel_ray() per lane.
   floatV pxf = convert_floatV(px0 + GI_LANES) + 0.5f;
@@ -143,28 +151,28 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
   float3V fn = crossV(e1, e2);
   floatV worldArea2 = sqrt(dotV(fn, fn));
   float3V geoN = selV(f3v(zero, zero, (floatV)(1.0f)), f3v(fn.x / worldArea2, fn.y / worldArea2, fn.z / worldArea2), worldArea2 > 0.0f);
-  float3V n0 = GI_FETCH3(nrmF, i0), n1 = GI_FETCH3(nrmF, i1), n2 = GI_FETCH3(nrmF, i2);
+  float3V n0, n1, n2;
+  GI_FETCH3(n0, nrmF, i0)
+  GI_FETCH3(n1, nrmF, i1)
+  GI_FETCH3(n2, nrmF, i2)
   float3V nrm = safe_normalizeV(addV(addV(scaleV(n0, b0), scaleV(n1, b1)), scaleV(n2, b2)), geoN);
   nrm = selV(nrm, negV(nrm), dotV(nrm, geoN) < 0.0f);
   intV back = dotV(geoN, d) > 0.0f;
   geoN = selV(geoN, negV(geoN), back);
   nrm = selV(nrm, negV(nrm), back);
   float4V tg0, tg1, tg2;
-#define GI_FETCH4(out, idx)                                                                       \
-  out.x = GI_GATHER(floatV, tanF, (idx) * 4u); out.y = GI_GATHER(floatV, tanF, (idx) * 4u + 1u); \
-  out.z = GI_GATHER(floatV, tanF, (idx) * 4u + 2u); out.w = GI_GATHER(floatV, tanF, (idx) * 4u + 3u);
-  GI_FETCH4(tg0, i0)
-  GI_FETCH4(tg1, i1)
-  GI_FETCH4(tg2, i2)
-#undef GI_FETCH4
+  GI_GATHER_AOS4(float, tanF, i0, tg0.x, tg0.y, tg0.z, tg0.w)
+  GI_GATHER_AOS4(float, tanF, i1, tg1.x, tg1.y, tg1.z, tg1.w)
+  GI_GATHER_AOS4(float, tanF, i2, tg2.x, tg2.y, tg2.z, tg2.w)
   float4V tng;
   tng.x = b0 * tg0.x + b1 * tg1.x + b2 * tg2.x;
   tng.y = b0 * tg0.y + b1 * tg1.y + b2 * tg2.y;
   tng.z = b0 * tg0.z + b1 * tg1.z + b2 * tg2.z;
   tng.w = b0 * tg0.w + b1 * tg1.w + b2 * tg2.w;
-  floatV u0 = GI_GATHER(floatV, uvF, i0 * 2u), v0 = GI_GATHER(floatV, uvF, i0 * 2u + 1u);
-  floatV u1 = GI_GATHER(floatV, uvF, i1 * 2u), v1 = GI_GATHER(floatV, uvF, i1 * 2u + 1u);
-  floatV u2 = GI_GATHER(floatV, uvF, i2 * 2u), v2 = GI_GATHER(floatV, uvF, i2 * 2u + 1u);
+  floatV u0, v0, u1, v1, u2, v2;
+  GI_GATHER_AOS2(float, uvF, i0, u0, v0)
+  GI_GATHER_AOS2(float, uvF, i1, u1, v1)
+  GI_GATHER_AOS2(float, uvF, i2, u2, v2)
   floatV u = b0 * u0 + b1 * u1 + b2 * u2, v = b0 * v0 + b1 * v1 + b2 * v2;
   floatV cosView = fabs(dotV(geoN, d));
   // Level of detail: texels per pixel footprint. The footprint side at view depth z is
@@ -177,30 +185,36 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
   floatV z = -(Vm[2] * position.x + Vm[6] * position.y + Vm[10] * position.z + Vm[14]);
   floatV footprint = view.orthographic ? (floatV)(view.texel_world_size) : view.texel_world_size * z;
   floatV pixelArea2 = worldArea2 * fmax(cosView, 1e-3f) / fmax(footprint * footprint, 1e-30f);
-  // Material fields (GiMaterial is 20 words).
+  // Material fields: GiMaterial is 20 words = five 4-word records; the first four are used:
+  // base colour | emissive, metallic | roughness, alpha cutoff, normal scale, alpha mode | textures.
   global const float* mf = (global const float*)materials;
   global const int* mi = (global const int*)materials;
-  uintV m20 = mat * 20u;
-  intV baseTex = GI_GATHER(intV, mi, m20 + 12u), mrTex = GI_GATHER(intV, mi, m20 + 13u);
-  intV normalTex = GI_GATHER(intV, mi, m20 + 14u), emTex = GI_GATHER(intV, mi, m20 + 15u);
+  uintV m5 = mat * 5u;
+  float4V base;
+  float3V emission;
+  floatV metallic, roughness, normalScale, unusedCutoff, unusedMode;
+  intV baseTex, mrTex, normalTex, emTex;
+  GI_GATHER_AOS4(float, mf, m5, base.x, base.y, base.z, base.w)
+  GI_GATHER_AOS4(float, mf, m5 + 1u, emission.x, emission.y, emission.z, metallic)
+  GI_GATHER_AOS4(float, mf, m5 + 2u, roughness, unusedCutoff, normalScale, unusedMode)
+  GI_GATHER_AOS4(int, mi, m5 + 3u, baseTex, mrTex, normalTex, emTex)
   intV lodTex = GI_SEL(normalTex, baseTex, baseTex >= 0);
   // texture_lod() per lane.
   floatV lod;
   {
     global const int* tab = (global const int*)textures;
-    intV ti = max(lodTex, 0) * 8;
     intV hasLod = (lodTex >= 0) & (pixelArea2 > 0.0f) & surface;
-    floatV tw = GI_ANY(hasLod) ? convert_floatV(GI_GATHER(intV, tab, ti + 1)) : (floatV)(1.0f);
-    floatV tht = GI_ANY(hasLod) ? convert_floatV(GI_GATHER(intV, tab, ti + 2)) : (floatV)(1.0f);
+    floatV tw = (floatV)(1.0f), tht = (floatV)(1.0f);
+    if (GI_ANY(hasLod)) {
+      intV unusedOffset, w, h, unusedLevels;
+      GI_GATHER_AOS4(int, tab, max(lodTex, 0) * 2, unusedOffset, w, h, unusedLevels)  // GiTexture: 2 records
+      tw = convert_floatV(w);
+      tht = convert_floatV(h);
+    }
     floatV texelArea = uvArea2 * tw * tht;
     lod = GI_SEL((floatV)(0.0f), 0.5f * log2(fmax(texelArea / pixelArea2, 1e-8f)), hasLod);
   }
   // eval_material() per lane.
-  float4V base;
-  base.x = GI_GATHER(floatV, mf, m20);
-  base.y = GI_GATHER(floatV, mf, m20 + 1u);
-  base.z = GI_GATHER(floatV, mf, m20 + 2u);
-  base.w = GI_GATHER(floatV, mf, m20 + 3u);
   intV hasBase = (baseTex >= 0) & surface;
   if (GI_ANY(hasBase)) {
     float4V c = sample_textureV(textures, texels, GI_SEL((intV)(-1), baseTex, hasBase), u, v, lod);
@@ -209,7 +223,6 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
     base.z *= GI_SEL((floatV)(1.0f), c.z, hasBase);
     base.w *= GI_SEL((floatV)(1.0f), c.w, hasBase);
   }
-  floatV metallic = GI_GATHER(floatV, mf, m20 + 7u), roughness = GI_GATHER(floatV, mf, m20 + 8u);
   intV hasMr = (mrTex >= 0) & surface;
   if (GI_ANY(hasMr)) {
     float4V mr = sample_textureV(textures, texels, mrTex, u, v, lod);
@@ -221,7 +234,6 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
   float3V diffuse = f3v(base.x * (1.0f - metallic), base.y * (1.0f - metallic), base.z * (1.0f - metallic));
   float3V f0 = f3v(mix((floatV)(0.04f), base.x, metallic), mix((floatV)(0.04f), base.y, metallic),
                    mix((floatV)(0.04f), base.z, metallic));
-  float3V emission = f3v(GI_GATHER(floatV, mf, m20 + 4u), GI_GATHER(floatV, mf, m20 + 5u), GI_GATHER(floatV, mf, m20 + 6u));
   intV hasEm = (emTex >= 0) & surface;
   if (GI_ANY(hasEm)) {
     float4V e = sample_textureV(textures, texels, emTex, u, v, lod);
@@ -235,7 +247,6 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
     float3V tt = safe_normalizeV(subV(t3, scaleV(nrm, dotV(nrm, t3))), f3v((floatV)(1.0f), zero, zero));
     float3V bt = scaleV(crossV(nrm, tt), GI_SEL((floatV)(1.0f), (floatV)(-1.0f), tng.w < 0.0f));
     float4V tn4 = sample_textureV(textures, texels, normalTex, u, v, lod);
-    floatV normalScale = GI_GATHER(floatV, mf, m20 + 10u);
     floatV tnx = (tn4.x * 2.0f - 1.0f) * normalScale, tny = (tn4.y * 2.0f - 1.0f) * normalScale;
     floatV tnz = tn4.z * 2.0f - 1.0f;
     float3V mapped = safe_normalizeV(addV(addV(scaleV(tt, tnx), scaleV(bt, tny)), scaleV(nrm, tnz)), nrm);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cl/gather_width.h"
 #include "cl/kernel_sources.h"
 #include "util/file_io.h"
 #include "util/hash.h"
@@ -220,6 +221,18 @@ void Profiler::discard() {
 }
 
 // ---------------------------------------------------------------------------------------------
+int gatherVectorWidth(const Context& ctx) {
+  if (const char* vw = std::getenv("GI_VECTOR_WIDTH"); vw && *vw) return ctx.vectorWidth();
+  if (!ctx.device().isCpu) return ctx.vectorWidth();
+  cl_uint native = deviceValue<cl_uint>(ctx.device().id, CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT);
+  return native >= 16 ? 16 : 8;
+}
+
+Defines withGatherWidth(const Context& ctx, Defines defines) {
+  defines.emplace_back("GI_VW", std::to_string(gatherVectorWidth(ctx)));
+  return defines;
+}
+
 Context::Context(const DeviceInfo& device) : device_(device) {
   vectorWidth_ = device_.isCpu ? 16 : 1;
   if (const char* vw = std::getenv("GI_VECTOR_WIDTH"); vw && *vw) {
@@ -279,7 +292,9 @@ std::string buildLog(cl_program p, cl_device_id d) {
 Program Context::buildProgram(const std::string& kernelFile, const Defines& defines) {
   std::string source = expandKernelIncludes(kernelFile);
   std::string options = "-cl-std=CL1.2 -cl-mad-enable -cl-no-signed-zeros";
-  options += " -DGI_VW=" + std::to_string(vectorWidth());
+  // A GI_VW among the defines (cl/gather_width.h) replaces the context's default lane count.
+  bool ownWidth = std::any_of(defines.begin(), defines.end(), [](const auto& d) { return d.first == "GI_VW"; });
+  if (!ownWidth) options += " -DGI_VW=" + std::to_string(vectorWidth());
   options += device_.isCpu ? " -DGI_DEVICE_CPU=1" : " -DGI_DEVICE_GPU=1";
   for (auto& [k, v] : defines) options += " -D" + k + (v.empty() ? "" : "=" + v);
 

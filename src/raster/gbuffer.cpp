@@ -5,6 +5,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "cl/gather_width.h"
 #include "render/views.h"
 
 namespace gi {
@@ -54,7 +55,7 @@ GiView rsmViewForLight(const GiLight& l, const Bounds& bounds, int resolution) {
 }
 
 RasterPasses::RasterPasses(cl::Context& ctx) : ctx_(ctx), rasterizer_(ctx) {
-  program_ = ctx.buildProgram("kernels/raster/gbuffer.cl");
+  program_ = ctx.buildProgram("kernels/raster/gbuffer.cl", cl::withGatherWidth(ctx));
   gbufferResolve_ = program_.kernel("gbuffer_resolve");
   rsmResolve_ = program_.kernel("rsm_resolve");
 }
@@ -67,7 +68,7 @@ void RasterPasses::renderGBuffer(const DeviceScene& scene, const GiView& camera,
                        scene.triangles, scene.triangleInstance, scene.materials, scene.textures, scene.texels,
                        out.position, out.geoNormal, out.normal, out.albedo, out.specular, out.emission, out.instance);
   // One work-item per GI_VW pixels of a row (16 on CPU devices, 1 on GPUs).
-  const int vw = ctx_.vectorWidth();
+  const int vw = cl::gatherVectorWidth(ctx_);
   const size_t lx = vw == 1 ? 16 : 1, ly = vw == 1 ? 16 : 8;
   ctx_.launch(gbufferResolve_, cl::NDRange::d2((camera.width + vw - 1) / vw, camera.height, lx, ly),
               "gbuffer: resolve");
@@ -118,7 +119,7 @@ void RasterPasses::renderRsm(const DeviceScene& scene, const Scene& host, int li
   rsmResolve_.args(view, scene.lights, light, out.visibility.triangle, scene.positions, scene.normals, scene.tangents,
                    scene.uvs, scene.triangles, scene.materials, scene.textures, scene.texels, out.position, out.normal,
                    out.flux);
-  const int vw = ctx_.vectorWidth();
+  const int vw = cl::gatherVectorWidth(ctx_);
   const size_t lx = vw == 1 ? 16 : 1, ly = vw == 1 ? 16 : 8;
   ctx_.launch(rsmResolve_, cl::NDRange::d2((resolution + vw - 1) / vw, resolution, lx, ly), "rsm: resolve");
 }

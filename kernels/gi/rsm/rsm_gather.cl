@@ -10,7 +10,7 @@
 // Output: irradiance E (float4) per low-resolution pixel, accumulated over lights.
 //
 // GI_VW adjacent low-resolution pixels per work-item; their RSM texels differ, so RSM reads are
-// per-lane loads (gathers).
+// per-lane loads: one 128-bit load per lane and plane (GI_GATHER_AOS4), not four scalar ones.
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/vector_width.h"
@@ -19,16 +19,6 @@
 #define GI_DOWN 2
 #endif
 
-#if GI_VW == 16
-#define GATHER(p, i) (float16)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], \
-                               (p)[(i).s6], (p)[(i).s7], (p)[(i).s8], (p)[(i).s9], (p)[(i).sa], (p)[(i).sb], \
-                               (p)[(i).sc], (p)[(i).sd], (p)[(i).se], (p)[(i).sf])
-#elif GI_VW == 8
-#define GATHER(p, i) (float8)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], \
-                              (p)[(i).s6], (p)[(i).s7])
-#else
-#define GATHER(p, i) ((p)[i])
-#endif
 #if GI_VW == 1
 #define SEL(a, b, c) ((c) ? (b) : (a))
 #else
@@ -49,10 +39,9 @@ kernel void rsm_gather(int width, int height, int lowWidth, int lowHeight, globa
   intV uc = min(u, lowWidth - 1);
   int fy = min(v * GI_DOWN, height - 1);
   intV pix = (intV)(fy * width) + min(uc * GI_DOWN, width - 1);
-  intV p4 = pix * 4;
-  floatV px = GATHER(gPosition, p4), py = GATHER(gPosition, p4 + 1), pz = GATHER(gPosition, p4 + 2),
-         pw = GATHER(gPosition, p4 + 3);
-  floatV nx = GATHER(gNormal, p4), ny = GATHER(gNormal, p4 + 1), nz = GATHER(gNormal, p4 + 2);
+  floatV px, py, pz, pw, nx, ny, nz, unused;
+  GI_GATHER_AOS4(float, gPosition, pix, px, py, pz, pw)
+  GI_GATHER_AOS4(float, gNormal, pix, nx, ny, nz, unused)
   // Project into the RSM (column-major view_proj).
   const float* M = rsmView.view_proj;
   floatV cx = M[0] * px + M[4] * py + M[8] * pz + M[12];
@@ -70,10 +59,11 @@ kernel void rsm_gather(int width, int height, int lowWidth, int lowHeight, globa
     float w = weights[s];
     intV tx = convert_intV(floor(sx + o.x)), ty = convert_intV(floor(sy + o.y));
     intV inside = tx >= 0 && tx < res && ty >= 0 && ty < res;
-    intV t4 = (clamp(ty, 0, res - 1) * res + clamp(tx, 0, res - 1)) * 4;
-    floatV qx = GATHER(rsmPosition, t4), qy = GATHER(rsmPosition, t4 + 1), qz = GATHER(rsmPosition, t4 + 2);
-    floatV mx = GATHER(rsmNormal, t4), my = GATHER(rsmNormal, t4 + 1), mz = GATHER(rsmNormal, t4 + 2);
-    floatV fr = GATHER(rsmFlux, t4), fg = GATHER(rsmFlux, t4 + 1), fb = GATHER(rsmFlux, t4 + 2);
+    intV t = clamp(ty, 0, res - 1) * res + clamp(tx, 0, res - 1);
+    floatV qx, qy, qz, mx, my, mz, fr, fg, fb, qw, mw, fw;
+    GI_GATHER_AOS4(float, rsmPosition, t, qx, qy, qz, qw)
+    GI_GATHER_AOS4(float, rsmNormal, t, mx, my, mz, mw)
+    GI_GATHER_AOS4(float, rsmFlux, t, fr, fg, fb, fw)
     floatV vx = qx - px, vy = qy - py, vz = qz - pz;
     floatV d2 = vx * vx + vy * vy + vz * vz;
     floatV cp = -(mx * vx + my * vy + mz * vz);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <memory>
 
+#include "cl/gather_width.h"
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/rsm/rsm_technique.h"
 
@@ -34,7 +35,7 @@ public:
     float radius = p.getFloat("rsm.radius");
     bool xi2 = p.getChoice("rsm.weights") == "xi2";
     if (down != down_) {
-      program_ = f.ctx.buildProgram("kernels/gi/rsm/rsm_gather.cl", {{"GI_DOWN", std::to_string(down)}});
+      program_ = f.ctx.buildProgram("kernels/gi/rsm/rsm_gather.cl", cl::withGatherWidth(f.ctx, {{"GI_DOWN", std::to_string(down)}}));
       kernel_ = program_.kernel("rsm_gather");
       down_ = down;
     }
@@ -63,7 +64,7 @@ public:
       res_ = res;
       xi2_ = xi2;
     }
-    int vw = f.ctx.vectorWidth();
+    int vw = cl::gatherVectorWidth(f.ctx);
     for (size_t l = 0; l < f.rsms.size(); ++l) {
       const ReflectiveShadowMap& r = f.rsms[l];
       kernel_.args(g.width, g.height, lw, lh, g.position, g.normal, r.view, r.position, r.normal, r.flux, samples,
