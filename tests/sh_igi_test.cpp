@@ -130,27 +130,11 @@ TEST(ShIgiProjection, ClampedCosineFieldProjectsToItsAnalyticCoefficients) {
   EXPECT_NEAR(e / (2 * kPi / 3), 1.0, 0.01);
 }
 
-namespace {
-
-RenderSettings smallSettings(const std::string& technique, int w, int h, std::vector<std::string> sets) {
-  RenderSettings rs;
-  rs.width = w;
-  rs.height = h;
-  rs.technique = technique;
-  rs.sets = std::move(sets);
-  rs.sets.push_back("rsm.resolution=64");
-  rs.sets.push_back("shadow.resolution=256");
-  rs.sets.push_back("shadow.cube_resolution=128");
-  return rs;
-}
-
-}  // namespace
-
 TEST(ShIgiFilter, MatchesHostMirrorAndNeverMixesAcrossDiscontinuities) {
   cl::Context& ctx = test::context();
   Scene s = test::cornellWithSpot(true);
   const int W = 37, H = 31;
-  Renderer r(ctx, s, smallSettings("sh-igi", W, H, {"sh-igi.count=16"}));
+  Renderer r(ctx, s, test::smallRenderSettings("sh-igi", W, H, {"sh-igi.count=16"}));
   r.renderFrame();
   const GBuffer& g = r.gbuffer();
   auto depth = ctx.download<float>(g.visibility.depth);
@@ -359,7 +343,7 @@ TEST(ShIgi, DirectLightThroughShEqualsTheAdditionTheoremValueOnAPlane) {
   s.computeBounds();
   const int W = 40, H = 30;
   Renderer r(test::context(), s,
-             smallSettings("sh-igi", W, H, {"sh-igi.count=16", "sh-igi.n=1", "sh-igi.m=1", "sh-igi.direct=vpl",
+             test::smallRenderSettings("sh-igi", W, H, {"sh-igi.count=16", "sh-igi.n=1", "sh-igi.m=1", "sh-igi.direct=vpl",
                                             "sh-igi.glossy=false"}));
   r.renderFrame();
   Image out = r.radiance(), direct = r.directRadiance();
@@ -389,7 +373,7 @@ TEST(ShIgi, VisibilityRaysDarkenOnlyWhereOccluded) {
   for (bool blocks : {true, false}) {
     Scene s = test::cornellWithSpot(blocks);
     auto render = [&](std::vector<std::string> sets) {
-      Renderer r(test::context(), s, smallSettings("sh-igi", W, H, std::move(sets)));
+      Renderer r(test::context(), s, test::smallRenderSettings("sh-igi", W, H, std::move(sets)));
       r.renderFrame();
       return r.indirectRadiance();
     };

@@ -39,4 +39,16 @@ CommandResult runGi(const std::string& args, const std::string& envPrefix) {
   return r;
 }
 
+RenderSettings smallRenderSettings(const std::string& technique, int width, int height, std::vector<std::string> sets) {
+  RenderSettings rs;
+  rs.width = width;
+  rs.height = height;
+  rs.technique = technique;
+  rs.sets = std::move(sets);
+  rs.sets.push_back("rsm.resolution=64");
+  rs.sets.push_back("shadow.resolution=256");
+  rs.sets.push_back("shadow.cube_resolution=128");
+  return rs;
+}
+
 }  // namespace gi::test

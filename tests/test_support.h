@@ -3,8 +3,10 @@
 #pragma once
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "cl/runtime.h"
+#include "render/renderer.h"
 
 namespace gi::test {
 
@@ -19,5 +21,9 @@ struct CommandResult {
 };
 // Runs the built `gi` binary with the given arguments (shell-quoted by the caller) and env prefix.
 CommandResult runGi(const std::string& args, const std::string& envPrefix = "");
+
+// Settings for technique tests on tiny images: small RSMs and shadow maps (64² RSM, 256² shadow
+// maps, 128² cube faces) keep a frame at a few milliseconds on PoCL; `sets` come first.
+RenderSettings smallRenderSettings(const std::string& technique, int width, int height, std::vector<std::string> sets);
 
 }  // namespace gi::test

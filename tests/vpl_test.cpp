@@ -45,17 +45,6 @@ std::vector<HostVpl> toHost(const std::vector<glm::vec4>& raw) {
   return v;
 }
 
-RenderSettings settings(const std::string& technique, int w, int h, std::vector<std::string> sets) {
-  RenderSettings rs;
-  rs.width = w;
-  rs.height = h;
-  rs.technique = technique;
-  rs.sets = std::move(sets);
-  rs.sets.push_back("rsm.resolution=64");
-  rs.sets.push_back("shadow.resolution=256");
-  rs.sets.push_back("shadow.cube_resolution=128");
-  return rs;
-}
 
 float luminanceOf(glm::vec3 c) { return c.x * 0.2126f + c.y * 0.7152f + c.z * 0.0722f; }
 
@@ -64,7 +53,7 @@ float luminanceOf(glm::vec3 c) { return c.x * 0.2126f + c.y * 0.7152f + c.z * 0.
 TEST(VplGeneration, MatchesHostMirrorIsDeterministicAndConservesFlux) {
   cl::Context& ctx = test::context();
   Scene s = emptyCornellWithSpot();
-  Renderer r(ctx, s, settings("vpl", 16, 16, {"vpl.count=300"}));
+  Renderer r(ctx, s, test::smallRenderSettings("vpl", 16, 16, {"vpl.count=300"}));
   r.renderFrame();
   const ReflectiveShadowMap& rsm = r.rsms().at(0);
   int res = rsm.view.width;
@@ -107,7 +96,7 @@ TEST(VplGather, KernelMatchesHostFormulaOnOddImage) {
   cl::Context& ctx = test::context();
   Scene s = emptyCornellWithSpot();
   const int W = 23, H = 19;  // not multiples of 16: padded slots
-  Renderer r(ctx, s, settings("vpl", W, H, {"vpl.count=64"}));
+  Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=64"}));
   r.renderFrame();
   Image ind = r.indirectRadiance();
   VplGenerator gen(ctx);
@@ -132,7 +121,7 @@ TEST(VplGather, KernelMatchesHostFormulaOnOddImage) {
 TEST(VplGather, OnePixelPerWorkItemPathGivesTheSameImage) {
   Scene s = emptyCornellWithSpot();
   auto renderWith = [&](cl::Context& ctx, const std::string& technique, std::vector<std::string> sets) {
-    Renderer r(ctx, s, settings(technique, 21, 17, std::move(sets)));
+    Renderer r(ctx, s, test::smallRenderSettings(technique, 21, 17, std::move(sets)));
     r.renderFrame();
     return r.indirectRadiance();
   };
@@ -197,7 +186,7 @@ TEST(Igi, EachSubImageIsShadedWithItsOwnVplSet) {
   cl::Context& ctx = test::context();
   Scene s = emptyCornellWithSpot();
   const int W = 19, H = 14, n = 3, m = 2, N = 50;  // N not a multiple of n·m
-  Renderer r(ctx, s, settings("igi", W, H, {"igi.count=50", "igi.n=3", "igi.m=2"}));
+  Renderer r(ctx, s, test::smallRenderSettings("igi", W, H, {"igi.count=50", "igi.n=3", "igi.m=2"}));
   r.renderFrame();
   VplGenerator gen(ctx);
   VplSet v;
@@ -225,7 +214,7 @@ TEST(Igi, EachSubImageIsShadedWithItsOwnVplSet) {
 TEST(Igi, OneByOnePatternEqualsVplExactly) {
   Scene s = emptyCornellWithSpot();
   auto run = [&](const std::string& tech, std::vector<std::string> sets) {
-    Renderer r(test::context(), s, settings(tech, 29, 22, std::move(sets)));
+    Renderer r(test::context(), s, test::smallRenderSettings(tech, 29, 22, std::move(sets)));
     r.renderFrame();
     return r.indirectRadiance();
   };
@@ -242,7 +231,7 @@ TEST(Igi, DiscontinuityFilterMatchesHost) {
   o.spotLight = CornellSpotLight{};
   Scene s = makeCornellBox(o);
   const int W = 37, H = 31;
-  Renderer r(ctx, s, settings("vpl", W, H, {"vpl.count=4"}));
+  Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=4"}));
   r.renderFrame();
   const GBuffer& g = r.gbuffer();
   std::mt19937 rng(3);

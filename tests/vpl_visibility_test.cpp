@@ -22,20 +22,9 @@ namespace {
 constexpr float kInvPi = 0.31830988618379067154f;
 constexpr float kEpsilon = 1e-3f;  // vpl.ray_epsilon default
 
-RenderSettings settings(const std::string& technique, int w, int h, std::vector<std::string> sets) {
-  RenderSettings rs;
-  rs.width = w;
-  rs.height = h;
-  rs.technique = technique;
-  rs.sets = std::move(sets);
-  rs.sets.push_back("rsm.resolution=64");
-  rs.sets.push_back("shadow.resolution=256");
-  rs.sets.push_back("shadow.cube_resolution=128");
-  return rs;
-}
 
 Image renderIndirect(const Scene& s, const std::string& technique, int w, int h, std::vector<std::string> sets) {
-  Renderer r(test::context(), s, settings(technique, w, h, std::move(sets)));
+  Renderer r(test::context(), s, test::smallRenderSettings(technique, w, h, std::move(sets)));
   r.renderFrame();
   return r.indirectRadiance();
 }
@@ -62,7 +51,7 @@ TEST(VplVisibility, RaysMatchBruteForceHostVisibility) {
   cl::Context& ctx = test::context();
   Scene s = test::cornellWithSpot(true);
   const int W = 24, H = 24, N = 48;
-  Renderer r(ctx, s, settings("vpl", W, H, {"vpl.count=48", "vpl.visibility=rays"}));
+  Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=48", "vpl.visibility=rays"}));
   r.renderFrame();
   Image ind = r.indirectRadiance();
   VplGenerator gen(ctx);
