@@ -4,22 +4,13 @@
 #include <memory>
 
 #include "cl/gather_width.h"
+#include "util/halton.h"
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/rsm/rsm_technique.h"
 
 namespace gi {
 
 namespace {
-
-float radicalInverse(uint32_t i, uint32_t base) {
-  float inv = 1.0f / float(base), f = inv, r = 0.0f;
-  while (i > 0) {
-    r += float(i % base) * f;
-    i /= base;
-    f *= inv;
-  }
-  return r;
-}
 
 class RsmTechnique : public Technique {
 public:

@@ -9,6 +9,7 @@
 //   of its depth at the pixel centre;
 // - radius 0 = 5 % of the scene's bounding-box diagonal; bias 0 = 1 % of the radius.
 #include "gi/ssao/ssao_technique.h"
+#include "util/halton.h"
 
 #include <cmath>
 #include <memory>
@@ -16,16 +17,6 @@
 namespace gi {
 
 namespace {
-
-float radicalInverse(uint32_t i, uint32_t base) {
-  float inv = 1.0f / float(base), f = inv, r = 0.0f;
-  while (i > 0) {
-    r += float(i % base) * f;
-    i /= base;
-    f *= inv;
-  }
-  return r;
-}
 
 // Both kernels take the vector width's worth of adjacent pixels of a row per work-item.
 cl::NDRange pixelGroups(const cl::Context& ctx, const GBuffer& g) {

@@ -1,4 +1,5 @@
 #include "gi/vpl/vpl_lights.h"
+#include "util/halton.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,16 +21,6 @@ int cdfSearch(const float* cdf, int n, float t) {
   return lo;
 }
 }  // namespace
-
-float radicalInverse(uint32_t i, uint32_t base) {
-  float inv = 1.0f / float(base), f = inv, r = 0.0f;
-  while (i > 0) {
-    r += float(i % base) * f;
-    i /= base;
-    f *= inv;
-  }
-  return r;
-}
 
 VplGenerator::VplGenerator(cl::Context& ctx, std::string label) : ctx_(ctx), label_(std::move(label)) {
   program_ = ctx_.buildProgram("kernels/gi/vpl/vpl_generate.cl");

@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "cl/runtime.h"
+#include "util/halton.h"  // radicalInverse, used by the host mirrors
 #include "raster/gbuffer.h"
 #include "gi/vpl/vpl_visibility.h"
 
@@ -38,9 +39,6 @@ private:
   int cdfRes_ = 0;
 };
 
-// Φ_base(i): the radical inverse of i in `base` (the Halton sequence's coordinate), in float as
-// the kernels compute it.
-float radicalInverse(uint32_t i, uint32_t base);
 
 // Host mirror of the generation (same formulas and summation order), for tests and the bench.
 struct HostVpl {
