@@ -10,9 +10,15 @@
 //   - full Cornell box (blocks) under the same spot, full image (direct + `vpl` indirect) against
 //     the full reference (4096 spp): asserted SSIM ≥ 0.90 = the issue's bound (measured 0.9039;
 //     one-bounce VPLs miss the higher bounces: image mean 0.149 vs 0.205).
-//   - Sponza (small, 96×54) with its sun, full image, 2048-spp reference: asserted SSIM ≥ 0.75
-//     (measured 0.791). The issue's 0.9 is NOT met and cannot be by one bounce: an exact one-bounce
-//     image on our direct pass scores 0.878 (docs/ACCURACY.md). Skipped without media.
+//   - the same box with multi-bounce VPLs (vpl.bounces=6, Keller's further generations) and
+//     visibility rays: asserted SSIM ≥ 0.91 (measured 0.9214) and mean within 10 % of the
+//     reference (measured −6.8 %: the GGX lobe of the indirect light, which VPLs do not carry).
+//   - Sponza (small, 96×54) with its sun, full image, 2048-spp reference: one-bounce `vpl`
+//     N = 256 asserted ≥ 0.75 (measured 0.791); multi-bounce `vpl` (N = 1024, RSM 256²,
+//     vpl.bounces=3, vpl.visibility=rays) asserted ≥ 0.87 (measured 0.8853). The issue's 0.9 is NOT
+//     met, and no diffuse VPL gather can meet it: our direct pass + a path-traced *diffuse-only*
+//     indirect image (the exact answer of L_ind = ρ/π·ΣE) scores 0.892; the rest is the specular
+//     lobe of the indirect light (docs/ACCURACY.md). Skipped without media.
 // The rasterized images are rendered at 2×2 the size and box-filtered down (the path tracer
 // integrates over each pixel's area). References come from tests/reference_store.h (stored, converged,
 // re-validated each run); GI_TEST_SAVE_IMAGES=<dir> writes the images (tests/accuracy_support.h).
@@ -113,14 +119,36 @@ TEST(VplAccuracy, FullCornellBoxWithVisibilityRays) {
   EXPECT_LT(eb, ea) << "visibility must bring one-bounce VPLs closer to the one-bounce path tracer";
 }
 
+// Keller's multi-bounce VPLs fill in the light of order ≥ 3 that one-bounce VPLs miss.
+TEST(VplAccuracy, FullCornellBoxMultiBounceWithVisibilityRays) {
+  Scene s = test::cornellWithSpot(true);
+  Pair p = renderPair(s, 128, 128, {"vpl.count=1024", "vpl.bounces=6", "vpl.visibility=rays"}, false,
+                      ReferenceMode::Full, false, "cornell_spot_full_128", 1024);
+  double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+  double mr = meanOf(p.raster), mp = meanOf(p.reference);
+  std::printf("Cornell box (blocks), spot light, direct + vpl N=1024, 6 further generations, rays vs full reference: "
+              "SSIM %.4f (bound 0.91), mean %.5f vs %.5f (%+.1f %%, bound 10 %%; one bounce: 0.14051)\n",
+              ssim, mr, mp, 100.0 * (mr / mp - 1.0));
+  EXPECT_GE(ssim, 0.91);
+  EXPECT_NEAR(mr / mp, 1.0, 0.10);
+}
+
 TEST(VplAccuracy, SponzaSmallFullImageSsim) {
   std::string why;
   std::optional<Scene> sponza = test::loadSponza(why);
   if (!sponza) GTEST_SKIP() << why;
   const Scene& s = *sponza;
-  Pair p = renderPair(s, 96, 54, {"vpl.count=256", "rsm.resolution=256"}, false, ReferenceMode::Full, false,
-                      "sponza_sun_full_96x54", 16);
-  double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
-  std::printf("Sponza 96x54, sun, direct + vpl N=256 vs full reference: SSIM %.4f (bound 0.75; issue target 0.9 not met)\n", ssim);
-  EXPECT_GE(ssim, 0.75);
+  auto ssimOf = [&](const Pair& p) {
+    return metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+  };
+  double one = ssimOf(renderPair(s, 96, 54, {"vpl.count=256", "rsm.resolution=256"}, false, ReferenceMode::Full,
+                                 false, "sponza_sun_full_96x54", 16));
+  double multi = ssimOf(renderPair(s, 96, 54,
+                                   {"vpl.count=1024", "rsm.resolution=256", "vpl.bounces=3", "vpl.visibility=rays"},
+                                   false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16));
+  std::printf("Sponza 96x54, sun, vs full reference: direct + one-bounce vpl N=256: SSIM %.4f (bound 0.75); "
+              "direct + vpl N=1024, 3 further generations, rays: SSIM %.4f (bound 0.87; issue target 0.9 not met, "
+              "diffuse-indirect ceiling 0.892)\n", one, multi);
+  EXPECT_GE(one, 0.75);
+  EXPECT_GE(multi, 0.87);
 }

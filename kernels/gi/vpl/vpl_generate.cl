@@ -17,6 +17,7 @@
 // positive `dminOverride` replaces it.
 #include "common/math.h"
 #include "common/shared_types.h"
+#include "gi/vpl/vpl_sequence.h"
 
 kernel void vpl_row_cdf(global const float4* flux, int res, global float* texelCdf, global float* rowSum) {
   int row = get_global_id(0);
@@ -38,16 +39,6 @@ kernel void vpl_marginal_cdf(global const float* rowSum, int res, global float* 
     s += rowSum[y];
     rowCdf[y] = s;
   }
-}
-
-inline float radical_inverse(uint i, uint base) {
-  float inv = 1.0f / (float)base, f = inv, r = 0.0f;
-  while (i > 0) {
-    r += (float)(i % base) * f;
-    i /= base;
-    f *= inv;
-  }
-  return r;
 }
 
 // First index in [0, n) whose inclusive prefix exceeds t (the last one if none does).

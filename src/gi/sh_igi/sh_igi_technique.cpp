@@ -37,7 +37,7 @@ public:
     if (fx < n || fy < m)
       throw Error("sh-igi.filter_x/filter_y (" + std::to_string(fx) + "x" + std::to_string(fy) +
                   ") must be at least the pattern " + std::to_string(n) + "x" + std::to_string(m));
-    generator_->generate(f.rsms, p.getInt("sh-igi.count"), p.getFloat("sh-igi.d_min"), vpls_);
+    generator_->generate(f.rsms, p.getInt("sh-igi.count"), p.getFloat("sh-igi.d_min"), vpls_, visibility_.bounces(f));
     gather_->resize(g.width, g.height, n, m);
     visibility_.update(f);
     Programs& prog = programs(f, fx, fy);

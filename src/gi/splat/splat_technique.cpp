@@ -28,7 +28,7 @@ public:
   void render(const FrameResources& f, cl::Buffer& indirect) override {
     const ParamSet& p = f.params;
     float eps = p.getFloat("splat.epsilon");
-    generator_->generate(f.rsms, p.getInt("splat.count"), p.getFloat("splat.d_min"), vpls_);
+    generator_->generate(f.rsms, p.getInt("splat.count"), p.getFloat("splat.d_min"), vpls_, visibility_.bounces(f));
     const GBuffer& g = f.gbuffer;
     int tilesX = (g.width + kTile - 1) / kTile, tilesY = (g.height + kTile - 1) / kTile;
     int count = std::max(vpls_.count, 1);

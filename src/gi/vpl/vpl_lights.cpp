@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace gi {
 
@@ -30,9 +31,10 @@ VplGenerator::VplGenerator(cl::Context& ctx, std::string label) : ctx_(ctx), lab
 }
 
 void VplGenerator::generate(const std::vector<ReflectiveShadowMap>& rsms, int perLight, float dminOverride,
-                            VplSet& out) {
+                            VplSet& out, const VplBounces& bounces) {
   if (perLight < 1 || perLight > 4096) throw Error("VPL count " + std::to_string(perLight) + " outside 1..4096");
-  int total = perLight * int(rsms.size());
+  int total = 0;
+  for (int n : vplGenerationSizes(perLight, bounces)) total += n * int(rsms.size());
   if (!out.vpls || out.count != total) {
     out.vpls = cl::Buffer(ctx_, size_t(std::max(total, 1)) * 3 * 16, CL_MEM_READ_WRITE, "VPLs");
     if (total == 0) ctx_.fill(out.vpls, 0.0f);
@@ -56,6 +58,70 @@ void VplGenerator::generate(const std::vector<ReflectiveShadowMap>& rsms, int pe
                  int(l) * perLight, out.vpls);
     ctx_.launch(sample_, cl::NDRange::d1(cl::roundUp(perLight, 64), 64), label_ + ": sample");
   }
+  if (bounces.generations > 0 && total > 0) bounce(int(rsms.size()), bounces, out);
+}
+
+glm::uvec4 bounceSequence(int generation) {
+  // Halton dimensions 2g and 2g + 1 (dimensions 0 and 1, bases 2 and 3, picked the RSM texel).
+  static constexpr uint32_t kPrimes[] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61};
+  if (generation < 1 || 2 * generation + 1 >= int(std::size(kPrimes)))
+    throw Error("VPL generation " + std::to_string(generation) + " outside 1..8");
+  // Multiplier ≈ base / golden ratio: consecutive digits land far apart.
+  auto multiplier = [](uint32_t b) { return std::clamp(uint32_t(std::lround(0.6180339887 * b)), 1u, b - 1); };
+  uint32_t bu = kPrimes[2 * generation], bv = kPrimes[2 * generation + 1];
+  return {bu, multiplier(bu), bv, multiplier(bv)};
+}
+
+void VplGenerator::bounce(int lights, const VplBounces& b, VplSet& out) {
+  if (b.generations <= 0) return;
+  if (!b.bvh || !b.scene) throw Error("VPL bounces need the scene's BVH");
+  if (!bounce_.get()) {
+    bounceProgram_ = ctx_.buildProgram("kernels/gi/vpl/vpl_bounce.cl");
+    alive_ = bounceProgram_.kernel("vpl_alive");
+    bounce_ = bounceProgram_.kernel("vpl_bounce");
+  }
+  std::vector<int> sizes = vplGenerationSizes(out.perLight, b);
+  size_t aliveBytes = size_t(*std::max_element(sizes.begin(), sizes.end())) * lights * 4;
+  if (!aliveList_ || aliveList_.bytes() < aliveBytes) {
+    aliveList_ = cl::Buffer(ctx_, aliveBytes, CL_MEM_READ_WRITE, "VPL live parents");
+    aliveCount_ = cl::Buffer(ctx_, size_t(lights) * 4, CL_MEM_READ_WRITE, "VPL live parent counts");
+  } else if (aliveCount_.bytes() < size_t(lights) * 4) {
+    aliveCount_ = cl::Buffer(ctx_, size_t(lights) * 4, CL_MEM_READ_WRITE, "VPL live parent counts");
+  }
+  int parentFirst = 0;
+  for (int g = 1; g < int(sizes.size()); ++g) {
+    int childFirst = parentFirst + sizes[g - 1] * lights;
+    alive_.args(out.vpls, lights, parentFirst, sizes[g - 1], aliveList_, aliveCount_);
+    ctx_.launch(alive_, cl::NDRange::d1(cl::roundUp(lights, 16), 16), label_ + ": bounce");
+    glm::uvec4 seq = bounceSequence(g);
+    unsigned a = b.bvh->setArgs(bounce_, 0);
+    bounce_.setArg(a++, b.scene->positions);
+    bounce_.setArg(a++, b.scene->normals);
+    bounce_.setArg(a++, b.scene->tangents);
+    for (int v : {lights, parentFirst, sizes[g - 1]}) bounce_.setArg(a++, v);
+    bounce_.setArg(a++, aliveList_);
+    bounce_.setArg(a++, aliveCount_);
+    for (int v : {childFirst, sizes[g]}) bounce_.setArg(a++, v);
+    for (int c = 0; c < 4; ++c) bounce_.setArg(a++, uint32_t(seq[c]));
+    bounce_.setArg(a++, b.rayEpsilon);
+    bounce_.setArg(a++, out.vpls);
+    ctx_.launch(bounce_, cl::NDRange::d1(cl::roundUp(size_t(sizes[g]) * lights, 64), 64), label_ + ": bounce");
+    parentFirst = childFirst;
+  }
+}
+
+glm::vec3 hostBounceDirection(glm::vec3 n, int walk, int generation, int k, int m) {
+  glm::uvec4 seq = bounceSequence(generation);
+  float u = scrambledRadicalInverse(uint32_t(walk) + 1, seq.x, seq.y) + float(k) / float(m);
+  float v = scrambledRadicalInverse(uint32_t(walk) + 1, seq.z, seq.w) + radicalInverse(uint32_t(k), 2);
+  u -= std::floor(u);
+  v -= std::floor(v);
+  // orthonormal_basis() of kernels/common/math.h (Duff et al. 2017).
+  float s = n.z >= 0.0f ? 1.0f : -1.0f;
+  float a = -1.0f / (s + n.z), c = n.x * n.y * a;
+  glm::vec3 t(1.0f + s * n.x * n.x * a, s * c, -s * n.x), b(c, s + n.y * n.y * a, -n.y);
+  float r = std::sqrt(u), phi = 2.0f * 3.14159265358979f * v;
+  return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0f, 1.0f - u));
 }
 
 std::vector<HostVpl> hostGenerateVpls(const GiView& view, const std::vector<glm::vec4>& position,

@@ -14,12 +14,13 @@
 
 namespace gi {
 
-// VPLs of all lights, `perLight` consecutive ones per light, float4 ×3 each:
-// (position, d_min²), (normal, 0), (flux Φ_p in W, 0).
+// VPLs of all lights, float4 ×3 each: (position, d_min²), (normal, 0), (flux Φ_p in W, 0).
+// Generation-major: the RSM's VPLs (generation 0, `perLight` consecutive ones per light), then
+// each further generation g of vpl.bounces, vplGenerationSizes()[g] per light, light by light.
 struct VplSet {
   cl::Buffer vpls;
-  int count = 0;     // all lights
-  int perLight = 0;
+  int count = 0;     // all lights, all generations
+  int perLight = 0;  // generation 0
 };
 
 // Flux-importance sampling of each light's RSM with the Halton (2, 3) sequence; CDFs built on the
@@ -28,13 +29,19 @@ class VplGenerator {
 public:
   explicit VplGenerator(cl::Context& ctx, std::string label = "vpl");
   // perLight in 1..4096; dminOverride > 0 replaces the default 0.5 × RSM texel footprint.
-  void generate(const std::vector<ReflectiveShadowMap>& rsms, int perLight, float dminOverride, VplSet& out);
+  // bounces.generations > 0 appends Keller's further generations (kernels/gi/vpl/vpl_bounce.cl).
+  void generate(const std::vector<ReflectiveShadowMap>& rsms, int perLight, float dminOverride, VplSet& out,
+                const VplBounces& bounces = {});
+  // The further generations alone: `out` holds generation 0 of `lights` lights at its start and
+  // room for the rest (tests seed it by hand).
+  void bounce(int lights, const VplBounces& bounces, VplSet& out);
 
 private:
   cl::Context& ctx_;
   std::string label_;
-  cl::Program program_;
-  cl::Kernel rowCdf_, marginal_, sample_;
+  cl::Program program_, bounceProgram_;
+  cl::Kernel rowCdf_, marginal_, sample_, alive_, bounce_;
+  cl::Buffer aliveList_, aliveCount_;
   cl::Buffer texelCdf_, rowSum_, rowCdfBuf_;
   int cdfRes_ = 0;
 };
@@ -50,6 +57,12 @@ struct HostVpl {
 std::vector<HostVpl> hostGenerateVpls(const GiView& rsmView, const std::vector<glm::vec4>& position,
                                       const std::vector<glm::vec4>& normal, const std::vector<glm::vec4>& flux,
                                       int res, int count, float dminOverride);
+// Host mirror of the direction of child k of m leaving the VPL of slot `walk` (0-based within its
+// light and generation) and normal n towards generation `generation` ≥ 1
+// (kernels/gi/vpl/vpl_bounce.cl), and the scrambled Halton bases and multipliers of that
+// generation: (base u, multiplier u, base v, multiplier v).
+glm::vec3 hostBounceDirection(glm::vec3 n, int walk, int generation, int k = 0, int m = 1);
+glm::uvec4 bounceSequence(int generation);
 // Host mirror of E_p summed over VPLs k = first, first + step, … (ALGORITHMS.md §2), W/m².
 glm::vec3 hostIrradiance(const std::vector<HostVpl>& vpls, glm::vec3 x, glm::vec3 n, int first = 0, int step = 1);
 

@@ -20,7 +20,8 @@ public:
     gather_ = std::make_unique<InterleavedGather>(f.ctx, "vpl");
   }
   void render(const FrameResources& f, cl::Buffer& indirect) override {
-    generator_->generate(f.rsms, f.params.getInt("vpl.count"), f.params.getFloat("vpl.d_min"), vpls_);
+    generator_->generate(f.rsms, f.params.getInt("vpl.count"), f.params.getFloat("vpl.d_min"), vpls_,
+                         visibility_.bounces(f));
     gather_->resize(f.gbuffer.width, f.gbuffer.height, 1, 1);
     visibility_.update(f);
     gather_->deinterleave(f.gbuffer);
@@ -53,7 +54,7 @@ public:
     if (fx < n || fy < m)
       throw Error("igi.filter_x/filter_y (" + std::to_string(fx) + "x" + std::to_string(fy) +
                   ") must be at least the pattern " + std::to_string(n) + "x" + std::to_string(m));
-    generator_->generate(f.rsms, p.getInt("igi.count"), p.getFloat("igi.d_min"), vpls_);
+    generator_->generate(f.rsms, p.getInt("igi.count"), p.getFloat("igi.d_min"), vpls_, visibility_.bounces(f));
     gather_->resize(f.gbuffer.width, f.gbuffer.height, n, m);
     size_t bytes = size_t(f.gbuffer.width) * f.gbuffer.height * 16;
     if (!irradiance_ || irradiance_.bytes() != bytes)

@@ -4,9 +4,11 @@
 // its any-hit traversal). The BVH is built on the first frame that asks for rays.
 //
 // Use: a technique owns one VplVisibility; each frame `update(frame)`; when enabled() it builds its
-// gather program with defines() and, after the kernel's own arguments, calls setArgs().
+// gather program with defines() and, after the kernel's own arguments, calls setArgs(). The same
+// object hands VPL generation its multi-bounce settings and the BVH (`bounces(frame)`).
 #pragma once
 #include <memory>
+#include <vector>
 
 #include "cl/runtime.h"
 #include "gi/technique.h"
@@ -15,8 +17,21 @@
 
 namespace gi {
 
-// Declares vpl.visibility and vpl.ray_epsilon (shared by vpl, igi, splat, sh-igi, second-order).
+// Declares vpl.visibility and vpl.ray_epsilon (shared by vpl, igi, splat, sh-igi, second-order)
+// and vpl.bounces, vpl.bounce_fraction (vpl, igi, splat, sh-igi).
 void declareVplVisibilityParams(ParamSet& p);
+
+// Keller's further VPL generations (VplGenerator::generate; kernels/gi/vpl/vpl_bounce.cl), traced
+// through the same BVH as the visibility rays.
+struct VplBounces {
+  int generations = 0;     // after the RSM's; 0 = one-bounce VPLs only
+  float fraction = 0.5f;   // N_{g+1} = ceil(fraction · N_g) per light
+  float rayEpsilon = 0.0f; // metres the rays start off the parent's surface
+  const DeviceScene* scene = nullptr;
+  const DeviceBvh* bvh = nullptr;
+};
+// VPLs per light of generation 0, 1, ..., b.generations.
+std::vector<int> vplGenerationSizes(int perLight, const VplBounces& b);
 
 class VplVisibility {
 public:
@@ -28,6 +43,9 @@ public:
   // Sets `float rayEpsilon` then the BVH arguments from index `first`; returns the next index.
   unsigned setArgs(cl::Kernel& kernel, unsigned first) const;
   const DeviceBvh* bvh() const { return bvh_.get(); }
+  // The frame's vpl.bounces settings with this object's BVH (built here the first time bounces are
+  // asked for).
+  VplBounces bounces(const FrameResources& frame);
 
 private:
   bool rays_ = false;
