@@ -13,12 +13,12 @@
 //   - the same box with multi-bounce VPLs (vpl.bounces=6, Keller's further generations) and
 //     visibility rays: asserted SSIM ≥ 0.91 (measured 0.9214) and mean within 10 % of the
 //     reference (measured −6.8 %: the GGX lobe of the indirect light, which VPLs do not carry).
-//   - Sponza (small, 96×54) with its sun, full image, 2048-spp reference: one-bounce `vpl`
-//     N = 256 asserted ≥ 0.75 (measured 0.791); multi-bounce `vpl` (N = 1024, RSM 256²,
-//     vpl.bounces=3, vpl.visibility=rays) asserted ≥ 0.87 (measured 0.8853). The issue's 0.9 is NOT
-//     met, and no diffuse VPL gather can meet it: our direct pass + a path-traced *diffuse-only*
-//     indirect image (the exact answer of L_ind = ρ/π·ΣE) scores 0.892; the rest is the specular
-//     lobe of the indirect light (docs/ACCURACY.md). Skipped without media.
+//   - Sponza (small, 96×54) with its sun, full image, 2048-spp reference, `vpl` N = 1024 with 3
+//     further generations (vpl.bounces=3) and visibility rays: the diffuse gather alone asserted
+//     ≥ 0.88 (measured 0.8945; an exact diffuse indirect term on our direct pass scores 0.892, so no
+//     diffuse gather reaches 0.9); with the receivers' GGX lobe (vpl.specular=true) asserted
+//     ≥ 0.90 = the issue's target (measured 0.9169). One-bounce `vpl` N = 256 scored 0.791
+//     (docs/techniques/vpl.md). Skipped without media.
 // The rasterized images are rendered at 2×2 the size and box-filtered down (the path tracer
 // integrates over each pixel's area). References come from tests/reference_store.h (stored, converged,
 // re-validated each run); GI_TEST_SAVE_IMAGES=<dir> writes the images (tests/accuracy_support.h).
@@ -138,17 +138,25 @@ TEST(VplAccuracy, SponzaSmallFullImageSsim) {
   std::optional<Scene> sponza = test::loadSponza(why);
   if (!sponza) GTEST_SKIP() << why;
   const Scene& s = *sponza;
-  auto ssimOf = [&](const Pair& p) {
-    return metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+  std::vector<std::string> multi = {"vpl.count=1024", "vpl.bounces=3", "vpl.visibility=rays"};
+  Pair p = renderPair(s, 96, 54, multi, false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
+  auto ssimOf = [&](const Image& raster) {
+    return metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(raster, s.exposure)).mean;
   };
-  double one = ssimOf(renderPair(s, 96, 54, {"vpl.count=256", "rsm.resolution=256"}, false, ReferenceMode::Full,
-                                 false, "sponza_sun_full_96x54", 16));
-  double multi = ssimOf(renderPair(s, 96, 54,
-                                   {"vpl.count=1024", "rsm.resolution=256", "vpl.bounces=3", "vpl.visibility=rays"},
-                                   false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16));
-  std::printf("Sponza 96x54, sun, vs full reference: direct + one-bounce vpl N=256: SSIM %.4f (bound 0.75); "
-              "direct + vpl N=1024, 3 further generations, rays: SSIM %.4f (bound 0.87; issue target 0.9 not met, "
-              "diffuse-indirect ceiling 0.892)\n", one, multi);
-  EXPECT_GE(one, 0.75);
-  EXPECT_GE(multi, 0.87);
+  double diffuse = ssimOf(p.raster);
+  // The same frame with the specular pass, against the same (already validated) reference.
+  multi.push_back("vpl.specular=true");
+  RenderSettings rs;
+  rs.width = 2 * 96;
+  rs.height = 2 * 54;
+  rs.technique = "vpl";
+  rs.sets = multi;
+  Renderer r(test::context(), s, rs);
+  r.renderFrame();
+  double glossy = ssimOf(test::boxDown(r.radiance(), 2));
+  std::printf("Sponza 96x54, sun, direct + vpl N=1024, 3 further generations, rays vs full reference: SSIM %.4f "
+              "(bound 0.88; diffuse-indirect ceiling 0.892), with vpl.specular: %.4f (bound 0.90 = issue target)\n",
+              diffuse, glossy);
+  EXPECT_GE(diffuse, 0.88);
+  EXPECT_GE(glossy, 0.90);
 }

@@ -17,6 +17,7 @@
 #include <cstring>
 
 #include "accuracy_support.h"
+#include "vpl_bounce_support.h"
 #include "gi/vpl/vpl_lights.h"
 #include "render/renderer.h"
 #include "reference/bvh.h"
@@ -255,21 +256,8 @@ TEST(VplBounce, EveryVplTechniqueGathersAllGenerations) {
   r.renderFrame();
   Image a = r.indirectRadiance();
   // The host sum over the list VplGenerator makes with the same settings (all generations).
-  DeviceScene ds(ctx, s);
-  DeviceBvh bvh(ctx, s, ds);
-  VplBounces b;
-  b.generations = 2;
-  b.rayEpsilon = 1e-3f;
-  b.scene = &ds;
-  b.bvh = &bvh;
-  VplGenerator gen(ctx);
-  VplSet set;
-  gen.generate(r.rsms(), 64, 0.0f, set, b);
-  ASSERT_EQ(set.count, 64 + 32 + 16);
-  std::vector<glm::vec4> raw = ctx.download<glm::vec4>(set.vpls);
-  std::vector<HostVpl> vpls(raw.size() / 3);
-  for (size_t k = 0; k < vpls.size(); ++k)
-    vpls[k] = {glm::vec3(raw[3 * k]), raw[3 * k].w, glm::vec3(raw[3 * k + 1]), glm::vec3(raw[3 * k + 2])};
+  std::vector<HostVpl> vpls = test::generatedVpls(ctx, s, r, 64, 2);
+  ASSERT_EQ(vpls.size(), size_t(64 + 32 + 16));
   auto pos = ctx.download<glm::vec4>(r.gbuffer().position), nrm = ctx.download<glm::vec4>(r.gbuffer().normal),
        alb = ctx.download<glm::vec4>(r.gbuffer().albedo);
   ctx.profiler().discard();

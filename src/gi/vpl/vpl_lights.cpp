@@ -176,6 +176,30 @@ glm::vec3 hostIrradiance(const std::vector<HostVpl>& vpls, glm::vec3 x, glm::vec
   return e * (float(step) * kInvPi);
 }
 
+glm::vec3 hostSpecularRadiance(const std::vector<HostVpl>& vpls, glm::vec3 x, glm::vec3 n, glm::vec3 wo, glm::vec3 f0,
+                               float roughness) {
+  float nv = glm::dot(n, wo);
+  if (!(nv > 0.0f)) return glm::vec3(0.0f);
+  float a = std::max(roughness * roughness, 1e-3f), a2 = a * a;  // ggx_alpha()
+  glm::vec3 l(0.0f);
+  for (const HostVpl& p : vpls) {
+    glm::vec3 v = p.position - x;
+    float d2 = std::max(glm::dot(v, v), 1e-20f), d = std::sqrt(d2);
+    float cp = -glm::dot(p.normal, v), cr = glm::dot(n, v);
+    if (cp <= 0.0f || cr <= 0.0f) continue;
+    glm::vec3 wi = v / d, h = glm::normalize(wo + wi);
+    float nh = std::max(glm::dot(n, h), 0.0f), nl = cr / d;
+    float dd = nh * nh * (a2 - 1.0f) + 1.0f;
+    float D = a2 / (3.14159265358979f * dd * dd);
+    float gv = nl * std::sqrt(nv * nv * (1.0f - a2) + a2), gl = nv * std::sqrt(nl * nl * (1.0f - a2) + a2);
+    float V = 0.5f / std::max(gv + gl, 1e-12f);
+    float m = std::clamp(1.0f - glm::dot(wi, h), 0.0f, 1.0f), m5 = m * m * m * m * m;
+    glm::vec3 F = f0 + (1.0f - f0) * m5;
+    l += p.flux * F * (D * V * cp * cr / (d2 * std::max(d2, p.dmin2)));
+  }
+  return l * kInvPi;
+}
+
 InterleavedGather::InterleavedGather(cl::Context& ctx, std::string prefix) : ctx_(ctx), prefix_(std::move(prefix)) {
   program_ = ctx_.buildProgram("kernels/gi/vpl/vpl_gather.cl");
   deinterleave_ = program_.kernel("gi_deinterleave");

@@ -27,13 +27,34 @@ public:
     gather_->deinterleave(f.gbuffer);
     gather_->shade(vpls_, &visibility_);
     gather_->reinterleaveRadiance(f.gbuffer, indirect);
+    if (f.params.getBool("vpl.specular")) addSpecular(f, indirect);
   }
 
 private:
+  // kernels/gi/vpl/vpl_specular.cl: the receivers' GGX lobe lit by the same VPLs, added to `indirect`.
+  void addSpecular(const FrameResources& f, cl::Buffer& indirect) {
+    bool rays = visibility_.enabled();
+    cl::Kernel& k = rays ? specularVisible_ : specular_;
+    if (!k.get()) {
+      (rays ? specularVisibleProgram_ : specularProgram_) =
+          f.ctx.buildProgram("kernels/gi/vpl/vpl_specular.cl", visibility_.defines());
+      k = (rays ? specularVisibleProgram_ : specularProgram_).kernel("vpl_specular");
+    }
+    const GBuffer& g = f.gbuffer;
+    int pixels = g.width * g.height;
+    k.args(pixels, g.view.eye[0], g.view.eye[1], g.view.eye[2], g.position, g.normal, g.specular, vpls_.vpls,
+           vpls_.count, indirect);
+    visibility_.setArgs(k, 10);
+    size_t items = (size_t(pixels) + f.ctx.vectorWidth() - 1) / f.ctx.vectorWidth();
+    f.ctx.launch(k, cl::NDRange::d1(cl::roundUp(items, 16), 16), rays ? "vpl: specular + rays" : "vpl: specular");
+  }
+
   std::unique_ptr<VplGenerator> generator_;
   std::unique_ptr<InterleavedGather> gather_;
   VplVisibility visibility_;
   VplSet vpls_;
+  cl::Program specularProgram_, specularVisibleProgram_;
+  cl::Kernel specular_, specularVisible_;
 };
 
 class IgiTechnique : public Technique {
@@ -88,6 +109,9 @@ TechniqueInfo vplTechniqueInfo() {
             p.addInt("vpl.count", 256, 1, 4096, "VPLs per light (Halton-stratified, flux-importance-sampled)");
             p.addFloat("vpl.d_min", 0.0, 0.0, 100.0,
                        "distance clamp of the 1/d² term in metres; 0 = 0.5 x the RSM texel footprint at each VPL");
+            p.addBool("vpl.specular", false,
+                      "also shade the receivers' GGX lobe with the VPLs (a second all-pairs pass; the diffuse gather "
+                      "of ALGORITHMS.md §2 alone when false)");
           },
           [] { return std::make_unique<VplTechnique>(); }};
 }
