@@ -6,11 +6,16 @@
 // <= 6 ms, lookup <= 2 ms, 3 cascades of 32³ all together <= 25 ms.
 //
 //   build/lpv_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 9] [--large]
-//                   [--falloff]
+//                   [--falloff] [--propagation]
 //   (--large adds 64³ cascades and a 128³ grid with 128 iterations; --falloff only prints how
 //   far light travels: the on-axis irradiance above one cosine-lobe cell in an empty grid after
-//   `resolution` iterations, against the exact Φ/(π r²) of that emitter, at 32³, 64³ and 128³)
+//   `resolution` iterations, against the exact Φ/(π r²) of that emitter, at 32³, 64³ and 128³;
+//   --propagation only times the propagation of one 16³ and one 32³ grid of random light and
+//   blockers: device ms and process CPU ms per step, median of --frames runs of `resolution` steps)
+#include <sys/resource.h>
+
 #include <cstdio>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -48,12 +53,50 @@ void printFalloff(cl::Context& ctx, int n) {
   std::printf(" cells\n");
 }
 
+double processCpuMs() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return (u.ru_utime.tv_sec + u.ru_stime.tv_sec) * 1e3 + (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-3;
+}
+
+// Propagation alone on one n³ grid of random light and random blockers: per step, the device time
+// (profiler) and the process CPU time (all PoCL threads; less inflated by other processes' load).
+void timePropagation(cl::Context& ctx, int n, int runs) {
+  LpvVolume v(ctx, n, 1);
+  v.begin({LpvCascade{glm::vec3(0.0f), 1.0f}}, 1.0f);
+  v.resolve(false);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), pos(0.0f, 1.0f);
+  std::vector<glm::vec4> grid(v.cellsPerGrid() * 3), geometry(v.nodesPerGrid());
+  for (glm::vec4& c : grid) c = glm::vec4(pos(rng), 0.5f * u(rng), 0.5f * u(rng), 0.5f * u(rng));
+  for (glm::vec4& c : geometry) c = 0.3f * glm::vec4(pos(rng), 0.5f * u(rng), 0.5f * u(rng), 0.5f * u(rng));
+  v.setGeometry(geometry);
+  for (bool blocking : {false, true}) {
+    std::vector<double> device, cpu;
+    for (int r = 0; r < runs + 1; ++r) {  // the first run warms up
+      v.setInjected(grid);
+      ctx.finish();
+      double c0 = processCpuMs();
+      v.propagate(n, blocking);
+      double ms = 0.0;
+      for (auto& [name, t] : ctx.profiler().collect())
+        if (name == "lpv: propagate") ms = t;
+      double c1 = processCpuMs();
+      if (r == 0) continue;
+      device.push_back(ms / n);
+      cpu.push_back((c1 - c0) / n);
+    }
+    std::printf("  %d^3, %d steps, blocking %s: %.3f ms per step on the device, %.3f ms CPU per step\n", n, n,
+                blocking ? "on " : "off", timing::median(device), timing::median(cpu));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   timing::FrameSettings a;
   std::string sceneName = "scenes/sponza.json";
-  bool large = false, falloff = false;
+  bool large = false, falloff = false, propagation = false;
   for (int i = 1; i < argc; ++i) {
     std::string k = argv[i];
     auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
@@ -63,8 +106,9 @@ int main(int argc, char** argv) {
     else if (k == "--frames") a.frames = std::stoi(next());
     else if (k == "--large") large = true;
     else if (k == "--falloff") falloff = true;
+    else if (k == "--propagation") propagation = true;
     else {
-      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large] [--falloff]\n");
+      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large] [--falloff] [--propagation]\n");
       return 2;
     }
   }
@@ -73,6 +117,11 @@ int main(int argc, char** argv) {
     if (falloff) {
       std::printf("lpv falloff: on-axis irradiance above one cosine-lobe cell, relative to the exact 1/(pi r^2)\n");
       for (int n : {32, 64, 128}) printFalloff(ctx, n);
+      return 0;
+    }
+    if (propagation) {
+      std::printf("lpv propagation alone (%s), median of %d runs\n", ctx.device().name.c_str(), a.frames);
+      for (int n : {16, 32}) timePropagation(ctx, n, a.frames);
       return 0;
     }
     Scene scene;

@@ -14,31 +14,45 @@
 //   lpv_resolve_geometry  fixed-point sums -> blocking potential per node: of the two surfel sources
 //                         (RSM, camera) the one that saw more surface at the node (larger DC term);
 //                         summing both would count a surface seen by both twice.
+//   lpv_transmittance     per cell and incoming face, the fraction of the neighbour's light the
+//                         geometry volume lets through, once per frame (static over the steps).
 //   lpv_propagate         one gather step: each cell collects from its 6 neighbours, 5 faces each.
-//   lpv_lookup            per pixel: trilinear in the accumulated grid at x + ½ cell along the
+//   lpv_lookup_grid       accumulated grid -> the lookup grid (irradiance coefficients, float4 per
+//                         cell and channel).
+//   lpv_lookup            per pixel: trilinear in the lookup grid at x + ½ cell along the
 //                         geometric normal; irradiance by the clamped-cosine convolution at −n;
 //                         L = ρ/π · E; cascades blended per seed 003 eq. 3.2.
 //
 // Determinism (§7): the scatter steps add integers (64-bit fixed point, `atom_add`), so the sums do
-// not depend on the order work-items run in; each work-item first merges a run of LPV_RUN texels
-// that fall into the same cell (integer sums again, so the merging does not change the result).
+// not depend on the order work-items run in. Each work-item first sums, in float and in a fixed
+// order, the texels of its run of LPV_RUN that fall into the same cell, and converts that sum to
+// fixed point once (the conversion costs more than the sum): the same texels always give the same
+// partial sums, so the result stays bit-identical run to run.
 //
 // Layouts (N = LPV_N, cells (z·N + y)·N + x, nodes the same with N + 1):
 //   grid     float planes [cascade][channel r,g,b][coefficient][cell]: SH coefficients of intensity
-//            (sh.h order), after LPV_PAD floats of padding (the buffer ends with LPV_PAD more), so
-//            the propagation's row loads one cell left or right of a row stay inside the buffer;
+//            (sh.h order), after LPV_PAD floats of padding, each plane followed by LPV_SKEW floats
+//            (zero), so the propagation's row loads one cell left or right of a row stay inside
+//            the buffer;
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
 //   geometry float planes [cascade][coefficient][node]; geometryAcc long [cascade][source rsm, camera][node][4]
+//   transmittance float planes [cascade][direction][face][cell] (padded like grid)
+//   lookupGrid float4 [cascade][channel][cell] (lpv_lookup_grid)
 //   cascades float4 [cascade]: (origin xyz of cell (0,0,0)'s corner, cell edge s), metres
-// The propagation works on LPV_LANES cells of a row per work-item (16 on CPU devices: float16
-// lanes; 1 on GPUs), the lane-wise convention of common/vector_width.h.
+// The propagation works on LPV_LANES cells of a row per work-item, the injection and surfel
+// kernels on GI_VW texels at a time (the native float width on CPU devices: 16 with AVX-512, 8
+// with AVX2; 1 on GPUs), the lane-wise convention of common/vector_width.h.
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #include "common/math.h"
 #include "common/sh.h"
 #include "common/shared_types.h"
+#include "common/vector_width.h"
 
 #define LPV_CELLS (LPV_N * LPV_N * LPV_N)
-#define LPV_PLANE(k, ch, coef) ((size_t)(((k) * 3 + (ch)) * 4 + (coef)) * LPV_CELLS)
+// Planes lie LPV_STRIDE = LPV_CELLS + LPV_SKEW floats apart: with a power-of-two N³ alone the 40-odd
+// planes a propagation work-item reads would fall into the same cache sets and evict each other.
+#define LPV_STRIDE (LPV_CELLS + LPV_SKEW)
+#define LPV_PLANE(k, ch, coef) ((size_t)(((k) * 3 + (ch)) * 4 + (coef)) * LPV_STRIDE)
 #define LPV_M (LPV_N + 1)
 #define LPV_NODES (LPV_M * LPV_M * LPV_M)
 
@@ -47,7 +61,6 @@
 #define LPV_SIDE_FACE_SOLID_ANGLE 0.4234413544f
 
 inline int cell_index(int3 c) { return (c.z * LPV_N + c.y) * LPV_N + c.x; }
-inline int node_index(int3 c) { return (c.z * LPV_M + c.y) * LPV_M + c.x; }
 
 inline long4 to_fixed4(float4 v, float scale) { return convert_long4_rte(v * scale); }
 
@@ -58,36 +71,12 @@ inline void atomic_add_fixed4(global long* acc, long4 v) {
   if (v.w != 0) atom_add(acc + 3, v.w);
 }
 
-// Cell of cascade k containing p, or (-1, ...) when p is outside the grid.
-inline int3 cell_of(float4 cascade, float3 p) {
-  float3 u = (p - cascade.xyz) / cascade.w;
-  int3 c = convert_int3_rtn(u);
-  bool inside = all(u >= 0.0f) && all(c >= 0) && all(c < LPV_N);
-  return inside ? c : (int3)(-1);
-}
-
-// Area of the surface seen through one texel/pixel of `view` at p with normal n (metres²): the
-// texel's solid angle times distance² over the cosine at the surface, the cosine clamped at 0.1
-// so that surfaces seen edge-on do not get an unbounded area.
-inline float surfel_area(const GiView* view, float3 p, float3 n) {
-  float3 axis = (float3)(-view->view[2], -view->view[6], -view->view[10]);
-  float s2 = view->texel_world_size * view->texel_world_size;
-  float3 dir = axis;
-  float a = s2;
-  if (!view->orthographic) {
-    float3 d = p - vload3(0, view->eye);
-    float dist = length(d);
-    dir = d / dist;
-    float z = dot(d, axis);
-    a = s2 * z * z * (z / dist);  // texel solid angle s²·cos³α times dist² = s²·z²·cos α
-  }
-  return a / fmax(fabs(dot(n, dir)), 0.1f);
-}
-
 // ---- injection --------------------------------------------------------------------------------
 
 // One work-item per LPV_RUN consecutive merged texels of one row of the block×block-merged RSM.
 // A merged texel's VPL: flux = Σ Φ, position and normal = the Φ-weighted means (weights r+g+b).
+// Lane-wise (common/vector_width.h): the VPLs and their cells of GI_VW merged texels at a time as
+// vectors; then they are merged into runs one by one, in order.
 kernel void lpv_inject(global const float4* rsmPosition, global const float4* rsmNormal,
                        global const float4* rsmFlux, int rsmRes, int block, float bias,
                        constant float4* cascades, float fixedScale, global long* gridAcc) {
@@ -95,100 +84,156 @@ kernel void lpv_inject(global const float4* rsmPosition, global const float4* rs
   int x0 = get_global_id(0) * LPV_RUN, y = get_global_id(1);
   if (y >= mergedRes || x0 >= mergedRes) return;
   int runCell[LPV_CASCADES];
-  long4 run[LPV_CASCADES][3];
+  float4 run[LPV_CASCADES][3];
   for (int k = 0; k < LPV_CASCADES; ++k) {
     runCell[k] = -1;
-    run[k][0] = run[k][1] = run[k][2] = (long4)(0);
+    run[k][0] = run[k][1] = run[k][2] = (float4)(0.0f);
   }
-  int x1 = min(x0 + LPV_RUN, mergedRes);
-  for (int x = x0; x <= x1; ++x) {
-    float3 flux = (float3)(0.0f), p = (float3)(0.0f), n = (float3)(0.0f);
-    float weight = 0.0f;
-    if (x < x1) {
-      for (int by = 0; by < block; ++by)
-        for (int bx = 0; bx < block; ++bx) {
-          size_t t = (size_t)(y * block + by) * rsmRes + (size_t)(x * block + bx);
-          float3 f = rsmFlux[t].xyz;
-          float w = f.x + f.y + f.z;
-          if (!(w > 0.0f)) continue;
-          flux += f;
-          p += w * rsmPosition[t].xyz;
-          n += w * rsmNormal[t].xyz;
-          weight += w;
-        }
-    }
-    bool valid = weight > 0.0f;  // false also for the flush step x == x1
-    if (valid) {
-      p /= weight;
-      n = safe_normalize(n, (float3)(0.0f));  // normals that cancel: an isotropic emitter, same flux
-    }
-    float4 lobe = sh_cosine_lobe(n) * GI_INV_PI;
+  for (int chunk = 0; chunk < LPV_RUN / GI_VW; ++chunk) {
+    intV x = x0 + chunk * GI_VW + GI_LANES;
+    intV column = min(x, mergedRes - 1) * block;  // lanes past the row's end re-read its last texel, dropped below
+    floatV fr = 0.0f, fg = 0.0f, fb = 0.0f, px = 0.0f, py = 0.0f, pz = 0.0f, nx = 0.0f, ny = 0.0f, nz = 0.0f;
+    floatV weight = 0.0f;
+    for (int by = 0; by < block; ++by)
+      for (int bx = 0; bx < block; ++bx) {
+        intV t = (y * block + by) * rsmRes + column + bx;
+        floatV r, g, b, unused, qx, qy, qz, mx, my, mz;
+        GI_GATHER_AOS4(float, (global const float*)rsmFlux, t, r, g, b, unused);
+        GI_GATHER_AOS4(float, (global const float*)rsmPosition, t, qx, qy, qz, unused);
+        GI_GATHER_AOS4(float, (global const float*)rsmNormal, t, mx, my, mz, unused);
+        floatV w = r + g + b;
+        intV lit = w > 0.0f;
+        fr += GI_SEL(0.0f, r, lit);
+        fg += GI_SEL(0.0f, g, lit);
+        fb += GI_SEL(0.0f, b, lit);
+        px += GI_SEL(0.0f, w * qx, lit);
+        py += GI_SEL(0.0f, w * qy, lit);
+        pz += GI_SEL(0.0f, w * qz, lit);
+        nx += GI_SEL(0.0f, w * mx, lit);
+        ny += GI_SEL(0.0f, w * my, lit);
+        nz += GI_SEL(0.0f, w * mz, lit);
+        weight += GI_SEL(0.0f, w, lit);
+      }
+    intV valid = weight > 0.0f && x < mergedRes;
+    px /= weight;
+    py /= weight;
+    pz /= weight;
+    // Normals that cancel: an isotropic emitter with the same flux.
+    floatV l2 = nx * nx + ny * ny + nz * nz, inv = GI_SEL(0.0f, rsqrt(l2), l2 > 1e-30f);
+    nx *= inv;
+    ny *= inv;
+    nz *= inv;
+    int cell[LPV_CASCADES][GI_VW];
     for (int k = 0; k < LPV_CASCADES; ++k) {
-      int cell = -1;
-      if (valid) {
-        int3 c = cell_of(cascades[k], p + bias * cascades[k].w * n);
-        cell = c.x < 0 ? -1 : cell_index(c);
-      }
-      if (cell != runCell[k]) {
-        if (runCell[k] >= 0)
-          for (int ch = 0; ch < 3; ++ch)
-            atomic_add_fixed4(gridAcc + ((size_t)(k * 3 + ch) * LPV_CELLS + runCell[k]) * 4, run[k][ch]);
-        runCell[k] = cell;
-        run[k][0] = run[k][1] = run[k][2] = (long4)(0);
-      }
-      if (cell >= 0) {
-        run[k][0] += to_fixed4(lobe * flux.x, fixedScale);
-        run[k][1] += to_fixed4(lobe * flux.y, fixedScale);
-        run[k][2] += to_fixed4(lobe * flux.z, fixedScale);
+      float4 c = cascades[k];
+      floatV ux = (px + bias * c.w * nx - c.x) / c.w, uy = (py + bias * c.w * ny - c.y) / c.w,
+             uz = (pz + bias * c.w * nz - c.z) / c.w;
+      intV cx = convert_intV(floor(ux)), cy = convert_intV(floor(uy)), cz = convert_intV(floor(uz));
+      intV inside = valid && ux >= 0.0f && uy >= 0.0f && uz >= 0.0f && cx < LPV_N && cy < LPV_N && cz < LPV_N;
+      vstoreV(GI_SEL((intV)(-1), (cz * LPV_N + cy) * LPV_N + cx, inside), 0, cell[k]);
+    }
+    float fluxR[GI_VW], fluxG[GI_VW], fluxB[GI_VW], lobeY[GI_VW], lobeZ[GI_VW], lobeX[GI_VW];
+    vstoreV(fr, 0, fluxR);
+    vstoreV(fg, 0, fluxG);
+    vstoreV(fb, 0, fluxB);
+    vstoreV(GI_SH_LOBE1 * ny * GI_INV_PI, 0, lobeY);
+    vstoreV(GI_SH_LOBE1 * nz * GI_INV_PI, 0, lobeZ);
+    vstoreV(GI_SH_LOBE1 * nx * GI_INV_PI, 0, lobeX);
+    for (int i = 0; i < GI_VW; ++i) {
+      float4 lobe = (float4)(GI_SH_LOBE0 * GI_INV_PI, lobeY[i], lobeZ[i], lobeX[i]);  // Φ = 1: I(ω) = lobe/π
+      for (int k = 0; k < LPV_CASCADES; ++k) {
+        if (cell[k][i] != runCell[k]) {
+          if (runCell[k] >= 0)
+            for (int ch = 0; ch < 3; ++ch)
+              atomic_add_fixed4(gridAcc + ((size_t)(k * 3 + ch) * LPV_CELLS + runCell[k]) * 4,
+                                to_fixed4(run[k][ch], fixedScale));
+          runCell[k] = cell[k][i];
+          run[k][0] = run[k][1] = run[k][2] = (float4)(0.0f);
+        }
+        if (runCell[k] >= 0) {
+          run[k][0] += lobe * fluxR[i];
+          run[k][1] += lobe * fluxG[i];
+          run[k][2] += lobe * fluxB[i];
+        }
       }
     }
   }
+  for (int k = 0; k < LPV_CASCADES; ++k)
+    if (runCell[k] >= 0)
+      for (int ch = 0; ch < 3; ++ch)
+        atomic_add_fixed4(gridAcc + ((size_t)(k * 3 + ch) * LPV_CELLS + runCell[k]) * 4, to_fixed4(run[k][ch], fixedScale));
 }
 
 // ---- geometry volume --------------------------------------------------------------------------
 
-// Adds the surfels of one row run (texels x0 .. x0 + LPV_RUN - 1 of row y of a width-wide view)
-// to source `source` of the geometry accumulators. A surfel is valid where position.w > 0.
+// Adds the surfels of one row run (texels x0 .. x0 + LPV_RUN − 1 of row y of a width-wide view)
+// to source `source` of the geometry accumulators. A surfel is valid where position.w > 0; its
+// area is the texel's solid angle times distance² over the cosine at the surface (for an
+// orthographic view the texel's square), the cosine clamped at 0.1 so that surfaces seen edge-on
+// do not get an unbounded area. Lane-wise (common/vector_width.h): areas and nodes of GI_VW
+// texels at a time as vectors; then the texels are merged into runs one by one, in order.
 inline void add_surfels(const GiView* view, global const float4* position, global const float4* normal, int width,
                         int x0, int y, constant float4* cascades, float fixedScale, int source,
                         global long* geometryAcc) {
   int runNode[LPV_CASCADES];
-  long4 run[LPV_CASCADES];
+  float4 run[LPV_CASCADES];
   for (int k = 0; k < LPV_CASCADES; ++k) {
     runNode[k] = -1;
-    run[k] = (long4)(0);
+    run[k] = (float4)(0.0f);
   }
-  int x1 = min(x0 + LPV_RUN, width);
-  for (int x = x0; x <= x1; ++x) {
-    bool valid = false;
-    float3 p = (float3)(0.0f), n = (float3)(0.0f);
-    float area = 0.0f;
-    if (x < x1) {
-      size_t t = (size_t)y * width + x;
-      float4 pw = position[t];
-      valid = pw.w > 0.0f;
-      p = pw.xyz;
-      n = normal[t].xyz;
-      if (valid) area = surfel_area(view, p, n);
+  const float3 axis = (float3)(-view->view[2], -view->view[6], -view->view[10]);
+  const float3 eye = vload3(0, view->eye);
+  const float texelArea = view->texel_world_size * view->texel_world_size;
+  for (int chunk = 0; chunk < LPV_RUN / GI_VW; ++chunk) {
+    intV x = x0 + chunk * GI_VW + GI_LANES;
+    intV texel = y * width + min(x, width - 1);  // lanes past the row's end re-read its last texel, dropped below
+    floatV px, py, pz, pw, nx, ny, nz, nw;
+    GI_GATHER_AOS4(float, (global const float*)position, texel, px, py, pz, pw);
+    GI_GATHER_AOS4(float, (global const float*)normal, texel, nx, ny, nz, nw);
+    intV valid = pw > 0.0f && x < width;
+    floatV dirx = (floatV)(axis.x), diry = (floatV)(axis.y), dirz = (floatV)(axis.z), area = (floatV)(texelArea);
+    if (!view->orthographic) {
+      floatV dx = px - eye.x, dy = py - eye.y, dz = pz - eye.z;
+      floatV dist = sqrt(dx * dx + dy * dy + dz * dz);
+      dirx = dx / dist;
+      diry = dy / dist;
+      dirz = dz / dist;
+      floatV along = dx * axis.x + dy * axis.y + dz * axis.z;
+      area = texelArea * along * along * (along / dist);  // texel solid angle s²·cos³α times dist²
     }
-    float4 lobe = sh_cosine_lobe(n);
+    area = area / fmax(fabs(nx * dirx + ny * diry + nz * dirz), 0.1f);
+    int node[LPV_CASCADES][GI_VW];
+    float weight[LPV_CASCADES][GI_VW], lobeY[GI_VW], lobeZ[GI_VW], lobeX[GI_VW];
     for (int k = 0; k < LPV_CASCADES; ++k) {
-      int node = -1;
-      float s = cascades[k].w;
-      if (valid) {
-        float3 u = (p - cascades[k].xyz) / s;
-        int3 c = convert_int3_rte(u);
-        node = all(u > -0.5f) && all(c >= 0) && all(c <= LPV_N) ? node_index(c) : -1;
+      float4 c = cascades[k];
+      floatV ux = (px - c.x) / c.w, uy = (py - c.y) / c.w, uz = (pz - c.z) / c.w;
+      intV cx = convert_intV(rint(ux)), cy = convert_intV(rint(uy)), cz = convert_intV(rint(uz));  // nearest node
+      intV inside = valid && ux > -0.5f && uy > -0.5f && uz > -0.5f && cx >= 0 && cy >= 0 && cz >= 0 &&
+                    cx <= LPV_N && cy <= LPV_N && cz <= LPV_N;
+      vstoreV(GI_SEL((intV)(-1), (cz * LPV_M + cy) * LPV_M + cx, inside), 0, node[k]);
+      vstoreV(area / (c.w * c.w), 0, weight[k]);
+    }
+    vstoreV(GI_SH_LOBE1 * ny, 0, lobeY);
+    vstoreV(GI_SH_LOBE1 * nz, 0, lobeZ);
+    vstoreV(GI_SH_LOBE1 * nx, 0, lobeX);
+    for (int i = 0; i < GI_VW; ++i) {
+      float4 lobe = (float4)(GI_SH_LOBE0, lobeY[i], lobeZ[i], lobeX[i]);
+      for (int k = 0; k < LPV_CASCADES; ++k) {
+        if (node[k][i] != runNode[k]) {
+          if (runNode[k] >= 0)
+            atomic_add_fixed4(geometryAcc + ((size_t)(k * 2 + source) * LPV_NODES + runNode[k]) * 4,
+                              to_fixed4(run[k], fixedScale));
+          runNode[k] = node[k][i];
+          run[k] = (float4)(0.0f);
+        }
+        if (runNode[k] >= 0) run[k] += lobe * weight[k][i];
       }
-      if (node != runNode[k]) {
-        if (runNode[k] >= 0)
-          atomic_add_fixed4(geometryAcc + ((size_t)(k * 2 + source) * LPV_NODES + runNode[k]) * 4, run[k]);
-        runNode[k] = node;
-        run[k] = (long4)(0);
-      }
-      if (node >= 0) run[k] += to_fixed4(lobe * (area / (s * s)), fixedScale);
     }
   }
+  for (int k = 0; k < LPV_CASCADES; ++k)
+    if (runNode[k] >= 0)
+      atomic_add_fixed4(geometryAcc + ((size_t)(k * 2 + source) * LPV_NODES + runNode[k]) * 4,
+                        to_fixed4(run[k], fixedScale));
 }
 
 kernel void lpv_geometry_rsm(GiView view, global const float4* rsmPosition, global const float4* rsmNormal,
@@ -236,6 +281,16 @@ kernel void lpv_resolve_geometry(global const long* geometryAcc, float invFixedS
 }
 
 // ---- propagation ------------------------------------------------------------------------------
+//
+// Light travels from the neighbour at cell − d into the cell, for the 6 directions d = s·e_a
+// (direction index 2a + (s < 0)). Per direction, 5 faces of the destination seen from the
+// neighbour's centre: the main face opposite the shared one (evaluated along d, solid angle
+// 0.4007 sr, re-emitted along d) and the 4 side faces (evaluated along normalize(2d ± e_b), the
+// direction to the side face's centre, 0.4234 sr, re-emitted along ±e_b; b the two other axes in
+// the order a + 1, a + 2, each + then −). Flux through a face = T_f · max(0, I_nb(ω_f)), re-emitted
+// as a clamped cosine lobe, with T_f = ΔΩ_f/π · (1 − clamp(GV · Y(−ω_f), 0, 1)): the geometry
+// volume GV at the face the two cells share (the mean of its 4 corner nodes: all light into the
+// destination enters there) blocks every face's share.
 
 #if LPV_LANES == 16
 typedef float16 floatL;
@@ -265,162 +320,254 @@ typedef int intL;
 
 // Index of axis a's linear SH coefficient in the (Y00, y, z, x) order.
 #define LPV_COEF(a) ((a) == 0 ? 3 : (a))
+#define LPV_SIDE_SCALE 0.4472135955f  // 1/√5: ω = normalize(2·d ± e_b)
+// Transmittance planes per cascade: 6 directions × 5 faces (main, +b1, −b1, +b2, −b2).
+#define LPV_FACES 30
+#define LPV_T_PLANE(k, dir, face) ((size_t)(((k) * 6 + (dir)) * 5 + (face)) * LPV_STRIDE)
 
-// Adds one face's transport to out[12] (r, g, b × 4 coefficients). The evaluation direction is
-// scale·(sa·axis_a + sb·axis_b) (b < 0: none), the re-emission lobe points along se·axis_e. The
-// arguments are constants after inlining, so only the non-zero terms are computed.
-inline void lpv_face(const floatL* in, const floatL* g, int blocking, int a, float sa, int b, float sb, float scale,
-                     int e, float se, float solidAngle, floatL* out) {
-  floatL w = (floatL)(solidAngle * GI_INV_PI);
-  if (blocking) {
-    floatL along = sa * g[LPV_COEF(a)];
-    if (b >= 0) along += sb * g[LPV_COEF(b)];
-    floatL potential = GI_SH_Y0 * g[0] - (GI_SH_Y1 * scale) * along;  // GV · Y(−ω)
-    w *= 1.0f - clamp(potential, 0.0f, 1.0f);
+// T_f of every direction and face of a destination cell, once per frame: the geometry volume does
+// not change over the propagation steps. Planes [cascade][direction][face][cell] after LPV_PAD
+// floats, like the grids. One work-item per (cell, direction, cascade): global (LPV_CELLS, 6,
+// LPV_CASCADES). A neighbour outside the grid sends nothing, whatever T is there.
+kernel void lpv_transmittance(global const float* geometry, global float* transmittance) {
+  size_t cell = get_global_id(0), dir = get_global_id(1), k = get_global_id(2);
+  int a = dir / 2;
+  float s = dir % 2 ? -1.0f : 1.0f;
+  int3 c = (int3)(cell % LPV_N, (cell / LPV_N) % LPV_N, cell / (LPV_N * LPV_N));
+  // The shared face's 4 corner nodes: on the plane between neighbour and cell along a.
+  int3 base = c + (int3)(a == 0 && s < 0.0f, a == 1 && s < 0.0f, a == 2 && s < 0.0f);
+  size_t n0 = (size_t)(base.z * LPV_M + base.y) * LPV_M + base.x;
+  size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;  // the face's two in-plane axes
+  float g[4];
+  for (int q = 0; q < 4; ++q) {
+    global const float* plane = geometry + (k * 4 + q) * LPV_NODES + n0;
+    g[q] = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
   }
-  for (int ch = 0; ch < 3; ++ch) {
-    const floatL* c = in + 4 * ch;
-    floatL along = sa * c[LPV_COEF(a)];
-    if (b >= 0) along += sb * c[LPV_COEF(b)];
-    floatL flux = fmax(GI_SH_Y0 * c[0] + (GI_SH_Y1 * scale) * along, 0.0f) * w;  // ΔΩ/π · max(0, I(ω))
-    out[4 * ch] += GI_SH_LOBE0 * flux;
-    out[4 * ch + LPV_COEF(e)] += (GI_SH_LOBE1 * se) * flux;
+  int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+  // GV · Y(−ω) for ω = d (main) and normalize(2d ± e_b) (sides).
+  float main = GI_SH_Y0 * g[0] - GI_SH_Y1 * s * g[LPV_COEF(a)];
+  float side = GI_SH_Y0 * g[0] - (GI_SH_Y1 * LPV_SIDE_SCALE) * (2.0f * s) * g[LPV_COEF(a)];
+  float sideB1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b1)], sideB2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b2)];
+  float potential[5] = {main, side - sideB1, side + sideB1, side - sideB2, side + sideB2};
+  global float* t = transmittance + LPV_PAD + cell;
+  for (int f = 0; f < 5; ++f) {
+    float solidAngle = f == 0 ? LPV_MAIN_FACE_SOLID_ANGLE : LPV_SIDE_FACE_SOLID_ANGLE;
+    t[LPV_T_PLANE(k, dir, f)] = solidAngle * GI_INV_PI * (1.0f - clamp(potential[f], 0.0f, 1.0f));
   }
 }
 
-// Gathers from the neighbour at −s along axis a (light travelling along s·axis_a into the cells
-// (x0 .. x0 + LPV_LANES − 1, y, z)): 1 main face and the 4 side faces.
-inline void lpv_gather(int a, float s, global const float* src, global const float* geometry, int x0, int y, int z,
-                       int blocking, floatL* out) {
-  int3 c = (int3)(x0, y, z);
-  int coord = a == 1 ? y : z;
-  if (a != 0 && (coord - (int)s < 0 || coord - (int)s >= LPV_N)) return;  // whole row outside
-  int stride = a == 0 ? 1 : a == 1 ? LPV_N : LPV_N * LPV_N;
-  int cell = (z * LPV_N + y) * LPV_N + x0 - (int)s * stride;  // may be −1 or LPV_CELLS: padding
-  floatL in[12];
-  for (int p = 0; p < 12; ++p) in[p] = vloadL(0, src + (size_t)p * LPV_CELLS + cell);
-  if (a == 0) {
-    intL x = x0 + LPV_LANE_IDS - (int)s;
-    intL inside = x >= 0 && x < LPV_N;
-    for (int p = 0; p < 12; ++p) in[p] = select((floatL)(0.0f), in[p], inside);
-  }
-  floatL g[4];
-  if (blocking) {
-    // The shared face's 4 corner nodes: on the plane between neighbour and cell along a.
-    int3 base = c + (int3)(a == 0 && s < 0.0f, a == 1 && s < 0.0f, a == 2 && s < 0.0f);
-    size_t n0 = (size_t)(base.z * LPV_M + base.y) * LPV_M + base.x;
-    size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;
-    for (int q = 0; q < 4; ++q) {
-      global const float* plane = geometry + (size_t)q * LPV_NODES + n0;
-      g[q] = 0.25f * (vloadL(0, plane) + vloadL(0, plane + u) + vloadL(0, plane + v) + vloadL(0, plane + u + v));
-    }
-  }
-  lpv_face(in, g, blocking, a, s, -1, 0.0f, 1.0f, a, s, LPV_MAIN_FACE_SOLID_ANGLE, out);
-  const float sideScale = 0.4472135955f;  // 1/√5: ω = normalize(2·d ± t)
+// Adds the light channel `in` (4 coefficient planes) of the neighbour in direction `dir` sends
+// through the destination's 5 faces: face fluxes T_f · max(0, I(ω_f)) into o[0] (sum of the
+// fluxes) and o[1..3] (signed along the re-emission axis), scaled by the lobe constants at the end.
+inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
+  int a = dir / 2;
+  float s = dir % 2 ? -1.0f : 1.0f;
   int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
-  lpv_face(in, g, blocking, a, 2.0f * s, b1, 1.0f, sideScale, b1, 1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
-  lpv_face(in, g, blocking, a, 2.0f * s, b1, -1.0f, sideScale, b1, -1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
-  lpv_face(in, g, blocking, a, 2.0f * s, b2, 1.0f, sideScale, b2, 1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
-  lpv_face(in, g, blocking, a, 2.0f * s, b2, -1.0f, sideScale, b2, -1.0f, LPV_SIDE_FACE_SOLID_ANGLE, out);
+  floatL dc = GI_SH_Y0 * in[0];
+  floatL fMain = fmax(dc + (GI_SH_Y1 * s) * in[LPV_COEF(a)], 0.0f) * t[0];
+  floatL side = dc + (GI_SH_Y1 * LPV_SIDE_SCALE * 2.0f * s) * in[LPV_COEF(a)];
+  floatL r1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b1)], r2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b2)];
+  floatL f1p = fmax(side + r1, 0.0f) * t[1], f1m = fmax(side - r1, 0.0f) * t[2];
+  floatL f2p = fmax(side + r2, 0.0f) * t[3], f2m = fmax(side - r2, 0.0f) * t[4];
+  o[0] += fMain + f1p + f1m + f2p + f2m;
+  o[LPV_COEF(a)] += s > 0.0f ? fMain : -fMain;
+  o[LPV_COEF(b1)] += f1p - f1m;
+  o[LPV_COEF(b2)] += f2p - f2m;
 }
 
 // One gather step. Work-item = LPV_LANES destination cells of a row (global (N / LPV_LANES, N,
-// N·cascades)). Light travels from the neighbour at cell − d in direction d (6 axes). Per
-// neighbour, 5 faces of the destination: the main face opposite the shared one (evaluated along
-// d, solid angle 0.4007 sr seen from the neighbour's centre, re-emitted along d) and the 4 side
-// faces (evaluated along normalize(2d + t), from the neighbour's centre to the side face's
-// centre, 0.4234 sr, re-emitted along t). Flux through a face = ΔΩ/π·max(0, I(ω)) × (1 − blocking),
-// re-emitted as a clamped cosine lobe. Blocking is the geometry volume at the shared face (the
-// mean of its 4 corner nodes: all light into the destination enters there) evaluated towards −ω;
-// `blocking` = 0 skips it (first iteration, or occlusion off).
+// N·cascades)); channel after channel, so that only 4 accumulators and one neighbour's 4
+// coefficients are live (16 float16 would not fit AVX2's registers). `blocking` = 0 uses the
+// unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them — or
+// occlusion off).
 kernel void lpv_propagate(global const float* src, global float* dst, global float* accumulated,
-                          global const float* geometry, int blocking) {
+                          global const float* transmittance, int blocking) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1);
   int z = get_global_id(2) % LPV_N, k = get_global_id(2) / LPV_N;
-  size_t base = LPV_PAD + LPV_PLANE(k, 0, 0);
-  src += base;
-  geometry += (size_t)k * 4 * LPV_NODES;
-  floatL out[12];
-  for (int p = 0; p < 12; ++p) out[p] = (floatL)(0.0f);
-  lpv_gather(0, 1.0f, src, geometry, x0, y, z, blocking, out);
-  lpv_gather(0, -1.0f, src, geometry, x0, y, z, blocking, out);
-  lpv_gather(1, 1.0f, src, geometry, x0, y, z, blocking, out);
-  lpv_gather(1, -1.0f, src, geometry, x0, y, z, blocking, out);
-  lpv_gather(2, 1.0f, src, geometry, x0, y, z, blocking, out);
-  lpv_gather(2, -1.0f, src, geometry, x0, y, z, blocking, out);
-  size_t cell = (size_t)(z * LPV_N + y) * LPV_N + x0;
-  for (int p = 0; p < 12; ++p) {
-    size_t o = base + (size_t)p * LPV_CELLS + cell;
-    vstoreL(out[p], 0, dst + o);
-    vstoreL(vloadL(0, accumulated + o) + out[p], 0, accumulated + o);
+  int cell = (z * LPV_N + y) * LPV_N + x0;
+  global const float* tCell = transmittance + LPV_PAD + LPV_T_PLANE(k, 0, 0) + cell;
+  intL x = x0 + LPV_LANE_IDS;
+  intL insideLeft = x >= 1, insideRight = x < LPV_N - 1;  // neighbours at x − 1 (dir 0), x + 1 (dir 1)
+  bool inside[6] = {true, true, y >= 1, y < LPV_N - 1, z >= 1, z < LPV_N - 1};
+  const int stride[3] = {1, LPV_N, LPV_N * LPV_N};
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch) {
+    size_t planes = LPV_PAD + LPV_PLANE(k, ch, 0);
+    floatL o[4] = {(floatL)(0.0f), (floatL)(0.0f), (floatL)(0.0f), (floatL)(0.0f)};
+#pragma unroll
+    for (int dir = 0; dir < 6; ++dir) {
+      if (!inside[dir]) continue;  // whole row outside (y, z neighbours)
+      int nb = cell - (dir % 2 ? -1 : 1) * stride[dir / 2];  // x neighbours may be −1 or LPV_CELLS: padding, skew
+      floatL in[4], t[5];
+#pragma unroll
+      for (int q = 0; q < 4; ++q) {
+        in[q] = vloadL(0, src + planes + (size_t)q * LPV_STRIDE + nb);
+        if (dir == 0) in[q] = select((floatL)(0.0f), in[q], insideLeft);
+        if (dir == 1) in[q] = select((floatL)(0.0f), in[q], insideRight);
+      }
+#pragma unroll
+      for (int f = 0; f < 5; ++f)
+        t[f] = blocking ? vloadL(0, tCell + LPV_T_PLANE(0, dir, f))
+                        : (floatL)((f == 0 ? LPV_MAIN_FACE_SOLID_ANGLE : LPV_SIDE_FACE_SOLID_ANGLE) * GI_INV_PI);
+      lpv_faces(dir, in, t, o);
+    }
+    const float lobe[4] = {GI_SH_LOBE0, GI_SH_LOBE1, GI_SH_LOBE1, GI_SH_LOBE1};
+#pragma unroll
+    for (int q = 0; q < 4; ++q) {
+      size_t at = planes + (size_t)q * LPV_STRIDE + cell;
+      floatL out = lobe[q] * o[q];
+      vstoreL(out, 0, dst + at);
+      vstoreL(vloadL(0, accumulated + at) + out, 0, accumulated + at);
+    }
   }
 }
 
-// ---- lookup -----------------------------------------------------------------------------------
+// ---- lookup ----------------------------------------------------------------------------------
 
-// Irradiance (W/m² per channel) at p with geometric normal ng and shading normal n from cascade k:
-// trilinear over cell centres at p + ½ cell along ng (clamped at the grid's border cells).
-inline float3 cascade_irradiance(global const float* accumulated, constant float4* cascades, int k, float3 p,
-                                 float3 ng, float3 n) {
-  float4 cascade = cascades[k];
-  float s = cascade.w;
-  float3 u = (p + 0.5f * s * ng - cascade.xyz) / s - 0.5f;
-  u = clamp(u, 0.0f, (float)(LPV_N - 1));
-  int3 c0 = min(convert_int3_rtn(u), LPV_N - 2);
-  float3 f = u - convert_float3(c0);
-  global const float* g = accumulated + LPV_PAD + LPV_PLANE(k, 0, 0);
-  float4 r = (float4)(0.0f), gr = (float4)(0.0f), b = (float4)(0.0f);
+// The lookup grid: per cascade k and channel ch a slab of LPV_N³ float4 (slab k·3 + ch, cells in
+// cell_index order) holding the accumulated coefficients times the clamped-cosine convolution and
+// 1/s² (radiance = intensity / s²): irradiance coefficients q with E(n) = q.x − q.y·n.y − q.z·n.z −
+// q.w·n.x for a surface with normal n (light arriving travels along −n). The lookup interpolates
+// them trilinearly; E is linear in q, so this equals the convolution of the interpolated grid.
+// One work-item per (cell, channel, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
+kernel void lpv_lookup_grid(global const float* accumulated, constant float4* cascades, global float4* lookupGrid) {
+  size_t cell = get_global_id(0), ch = get_global_id(1), k = get_global_id(2);
+  global const float* c = accumulated + LPV_PAD + LPV_PLANE(k, ch, 0) + cell;
+  float s = cascades[k].w;
+  float4 conv = (float4)(GI_SH_COSCONV0 * GI_SH_Y0, GI_SH_COSCONV1 * GI_SH_Y1, GI_SH_COSCONV1 * GI_SH_Y1,
+                         GI_SH_COSCONV1 * GI_SH_Y1) / (s * s);
+  lookupGrid[(k * 3 + ch) * LPV_CELLS + cell] = conv * (float4)(c[0], c[LPV_STRIDE], c[2 * LPV_STRIDE], c[3 * LPV_STRIDE]);
+}
+
+#if GI_VW == 1
+#define LPV_LANE0(v) (v)
+#else
+#define LPV_LANE0(v) ((v).s0)
+#endif
+
+// Trilinear interpolation over the 8 corners c[corner·4 + coefficient] (corner bits x, y, z).
+inline void lpv_trilinear(const floatV* c, floatV fx, floatV fy, floatV fz, floatV* q) {
 #pragma unroll
-  for (int corner = 0; corner < 8; ++corner) {
-    int3 o = (int3)(corner & 1, (corner >> 1) & 1, corner >> 2);
-    float w = (o.x ? f.x : 1.0f - f.x) * (o.y ? f.y : 1.0f - f.y) * (o.z ? f.z : 1.0f - f.z);
-    global const float* p = g + cell_index(c0 + o);
-    r += w * (float4)(p[0], p[LPV_CELLS], p[2 * LPV_CELLS], p[3 * LPV_CELLS]);
-    gr += w * (float4)(p[4 * LPV_CELLS], p[5 * LPV_CELLS], p[6 * LPV_CELLS], p[7 * LPV_CELLS]);
-    b += w * (float4)(p[8 * LPV_CELLS], p[9 * LPV_CELLS], p[10 * LPV_CELLS], p[11 * LPV_CELLS]);
+  for (int i = 0; i < 4; ++i) {
+    floatV x00 = mix(c[i], c[4 + i], fx), x10 = mix(c[8 + i], c[12 + i], fx);
+    floatV x01 = mix(c[16 + i], c[20 + i], fx), x11 = mix(c[24 + i], c[28 + i], fx);
+    q[i] = mix(mix(x00, x10, fy), mix(x01, x11, fy), fz);
   }
-  // Radiance = intensity / s²; light arriving at the surface travels along −n.
-  float3 m = -n;
-  float4 conv = (float4)(GI_SH_COSCONV0 * GI_SH_Y0, GI_SH_COSCONV1 * GI_SH_Y1 * m.y, GI_SH_COSCONV1 * GI_SH_Y1 * m.z,
-                         GI_SH_COSCONV1 * GI_SH_Y1 * m.x) / (s * s);
-  return (float3)(dot(r, conv), dot(gr, conv), dot(b, conv));
+}
+
+// Irradiance (W/m² per channel) of GI_VW pixels at p with geometric normal ng and shading normal n
+// from cascade k (per lane): trilinear over cell centres at p + ½ cell along ng (clamped at the
+// grid's border cells) in the lookup grid, E = q0 − q·n. When all lanes read the same 8 cells
+// (the common case: cells span many pixels) the corners are loaded once for all lanes.
+inline void cascade_irradiance(global const float4* grid, constant float4* cascades, intV k, float3V p, float3V ng,
+                               float3V n, floatV* e) {
+  floatV ox = 0.0f, oy = 0.0f, oz = 0.0f, s = 1.0f;
+#pragma unroll
+  for (int j = 0; j < LPV_CASCADES; ++j) {
+    float4 c = cascades[j];
+    intV here = k == j;
+    ox = GI_SEL(ox, (floatV)(c.x), here);
+    oy = GI_SEL(oy, (floatV)(c.y), here);
+    oz = GI_SEL(oz, (floatV)(c.z), here);
+    s = GI_SEL(s, (floatV)(c.w), here);
+  }
+  floatV ux = clamp((p.x + 0.5f * s * ng.x - ox) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
+  floatV uy = clamp((p.y + 0.5f * s * ng.y - oy) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
+  floatV uz = clamp((p.z + 0.5f * s * ng.z - oz) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
+  intV cx = min(convert_intV(floor(ux)), LPV_N - 2), cy = min(convert_intV(floor(uy)), LPV_N - 2),
+       cz = min(convert_intV(floor(uz)), LPV_N - 2);
+  floatV fx = ux - convert_floatV(cx), fy = uy - convert_floatV(cy), fz = uz - convert_floatV(cz);
+  intV cell = k * (3 * LPV_CELLS) + (cz * LPV_N + cy) * LPV_N + cx;
+  bool shared = GI_ALL(cell == LPV_LANE0(cell));
+  const int corner[8] = {0, 1, LPV_N, LPV_N + 1, LPV_N * LPV_N, LPV_N * LPV_N + 1, LPV_N * LPV_N + LPV_N,
+                         LPV_N * LPV_N + LPV_N + 1};
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch) {
+    floatV c[32], q[4];
+    if (shared) {
+      global const float4* g = grid + LPV_LANE0(cell) + ch * LPV_CELLS;
+#pragma unroll
+      for (int i = 0; i < 8; ++i) {
+        float4 v = g[corner[i]];
+        c[4 * i] = v.x;
+        c[4 * i + 1] = v.y;
+        c[4 * i + 2] = v.z;
+        c[4 * i + 3] = v.w;
+      }
+    } else {
+#pragma unroll
+      for (int i = 0; i < 8; ++i)
+        GI_GATHER_SPAN4(float, (global const float*)grid, (cell + ch * LPV_CELLS + corner[i]) * 4, c[4 * i],
+                        c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]);
+    }
+    lpv_trilinear(c, fx, fy, fz, q);
+    e[ch] = q[0] - q[1] * n.y - q[2] * n.z - q[3] * n.x;  // light arriving travels along −n
+  }
 }
 
 // Blend factor of seed 003 eq. 3.2: 0 well inside cascade k, rising to 1 over the outer tenth of
 // its extent (largest component over the axes).
-inline float cascade_blend(float4 cascade, float3 p) {
+inline floatV cascade_blend(float4 cascade, float3V p) {
   float extent = cascade.w * LPV_N, w = 0.1f * extent;
   float3 centre = cascade.xyz + 0.5f * extent;
-  float3 a = clamp((fabs(p - centre) - (0.5f * extent - w)) / w, 0.0f, 1.0f);
-  return fmax(a.x, fmax(a.y, a.z));
+  floatV ax = clamp((fabs(p.x - centre.x) - (0.5f * extent - w)) / w, 0.0f, 1.0f);
+  floatV ay = clamp((fabs(p.y - centre.y) - (0.5f * extent - w)) / w, 0.0f, 1.0f);
+  floatV az = clamp((fabs(p.z - centre.z) - (0.5f * extent - w)) / w, 0.0f, 1.0f);
+  return fmax(ax, fmax(ay, az));
 }
 
-// One work-item per pixel. `blendCascades` = 0 for a single grid fitted to the scene.
-kernel void lpv_lookup(int width, int height, global const float4* position, global const float4* geoNormal,
-                       global const float4* normal, global const float4* albedo, constant float4* cascades,
-                       int blendCascades, global const float* accumulated, global float4* out) {
-  int x = get_global_id(0), y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  size_t i = (size_t)y * width + x;
-  float4 pw = position[i];
-  if (!(pw.w > 0.0f)) {
-    out[i] = (float4)(0.0f);
-    return;
-  }
-  float3 p = pw.xyz, ng = geoNormal[i].xyz, n = normal[i].xyz;
-  float3 e;
-  if (!blendCascades) {
-    e = cascade_irradiance(accumulated, cascades, 0, p, ng, n);
-  } else {
-    int k = 0;
-    float a = cascade_blend(cascades[0], p);
-    while (k < LPV_CASCADES - 1 && a >= 1.0f) {
-      ++k;
-      a = cascade_blend(cascades[k], p);
+// GI_VW pixels of a row per work-item (global (⌈width / GI_VW⌉, height)). `blendCascades` = 0 for
+// a single grid fitted to the scene; else per pixel the finest cascade whose blend factor is below
+// 1, mixed with the next coarser one by that factor (constant-trip loops only).
+kernel void lpv_lookup(int width, int height, global const float* position, global const float* geoNormal,
+                       global const float* normal, global const float* albedo, constant float4* cascades,
+                       int blendCascades, global const float4* grid, global float4* out) {
+  int x0 = get_global_id(0) * GI_VW, y = get_global_id(1);
+  if (x0 >= width || y >= height) return;
+  intV x = x0 + GI_LANES;
+  intV pixel = y * width + min(x, width - 1);  // lanes past the row's end re-read its last pixel, not stored
+  float3V p, ng, n, rho;
+  floatV pw, unused;
+  GI_GATHER_AOS4(float, position, pixel, p.x, p.y, p.z, pw);
+  GI_GATHER_AOS4(float, geoNormal, pixel, ng.x, ng.y, ng.z, unused);
+  GI_GATHER_AOS4(float, normal, pixel, n.x, n.y, n.z, unused);
+  GI_GATHER_AOS4(float, albedo, pixel, rho.x, rho.y, rho.z, unused);
+  intV covered = pw > 0.0f;
+  p = selV(f3v(0.0f, 0.0f, 0.0f), p, covered);  // empty pixels: any finite point, result dropped
+  intV k = 0;
+  floatV a = 0.0f;
+  if (blendCascades) {
+    a = cascade_blend(cascades[0], p);
+#pragma unroll
+    for (int j = 1; j < LPV_CASCADES; ++j) {
+      intV coarser = a >= 1.0f;
+      k = GI_SEL(k, (intV)(j), coarser);
+      a = GI_SEL(a, cascade_blend(cascades[j], p), coarser);
     }
-    e = cascade_irradiance(accumulated, cascades, k, p, ng, n);
-    if (a > 0.0f && k < LPV_CASCADES - 1)
-      e = mix(e, cascade_irradiance(accumulated, cascades, k + 1, p, ng, n), a);
+    a = GI_SEL(a, (floatV)(0.0f), k == LPV_CASCADES - 1);  // the coarsest cascade blends with nothing
   }
-  out[i] = (float4)(fmax(albedo[i].xyz * GI_INV_PI * e, 0.0f), 0.0f);
+  floatV e[3];
+  cascade_irradiance(grid, cascades, k, p, ng, n, e);
+  if (GI_ANY(a > 0.0f)) {
+    floatV coarse[3];
+    cascade_irradiance(grid, cascades, min(k + 1, LPV_CASCADES - 1), p, ng, n, coarse);
+#pragma unroll
+    for (int ch = 0; ch < 3; ++ch) e[ch] = mix(e[ch], coarse[ch], a);
+  }
+  floatV keep = GI_SEL((floatV)(0.0f), (floatV)(GI_INV_PI), covered);
+  floatV lr = fmax(rho.x * keep * e[0], 0.0f), lg = fmax(rho.y * keep * e[1], 0.0f), lb = fmax(rho.z * keep * e[2], 0.0f);
+#if GI_VW == 1
+  out[pixel] = (float4)(lr, lg, lb, 0.0f);
+#else
+  if (x0 + GI_VW <= width) {
+    floatV zero = 0.0f;
+    GI_AOS4_STORE((global float*)(out + y * width + x0), lr, lg, lb, zero);
+  } else {
+    float vals[3][GI_VW];
+    vstoreV(lr, 0, vals[0]);
+    vstoreV(lg, 0, vals[1]);
+    vstoreV(lb, 0, vals[2]);
+    for (int l = 0; x0 + l < width; ++l) out[y * width + x0 + l] = (float4)(vals[0][l], vals[1][l], vals[2][l], 0.0f);
+  }
+#endif
 }

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cl/gather_width.h"
+
 namespace gi {
 
 std::vector<LpvCascade> lpvCascadeLayout(const Bounds& bounds, const glm::vec3& camera, int resolution,
@@ -38,8 +40,9 @@ float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveSha
   return float(std::ldexp(1.0, 48) / std::max(bound, 1e-20));
 }
 
-// Cells of a row per propagation work-item: the device's vector width (16 on CPUs, 1 on GPUs),
-// reduced to a width the row length is a multiple of.
+// Cells of a row per propagation work-item: the device's native float vector width (16 with
+// AVX-512, 8 with AVX2, 1 on GPUs; cl/gather_width.h), reduced to a width the row length is a
+// multiple of.
 int propagationLanes(int vectorWidth, int n) {
   for (int lanes : {16, 8, 4})
     if (lanes <= vectorWidth && n % lanes == 0) return lanes;
@@ -47,24 +50,33 @@ int propagationLanes(int vectorWidth, int n) {
 }
 
 LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
-    : ctx_(ctx), n_(resolution), cascades_(cascadeCount), lanes_(propagationLanes(ctx.vectorWidth(), resolution)) {
+    : ctx_(ctx),
+      n_(resolution),
+      cascades_(cascadeCount),
+      vw_(cl::gatherVectorWidth(ctx)),
+      lanes_(propagationLanes(vw_, resolution)) {
+  // GI_VW: texels or pixels per work-item of the injection, surfel and lookup kernels (a divisor of LPV_RUN).
   program_ = ctx.buildProgram("kernels/gi/lpv/lpv.cl", {{"LPV_N", std::to_string(n_)},
                                                          {"LPV_CASCADES", std::to_string(cascades_)},
                                                          {"LPV_RUN", std::to_string(kRunLength)},
                                                          {"LPV_LANES", std::to_string(lanes_)},
-                                                         {"LPV_PAD", std::to_string(kPad)}});
+                                                         {"LPV_PAD", std::to_string(kPad)},
+                                                         {"LPV_SKEW", std::to_string(kSkew)},
+                                                         {"GI_VW", std::to_string(vw_)}});
   inject_ = program_.kernel("lpv_inject");
   geometryRsm_ = program_.kernel("lpv_geometry_rsm");
   geometryCamera_ = program_.kernel("lpv_geometry_camera");
   resolveInjection_ = program_.kernel("lpv_resolve_injection");
   resolveGeometry_ = program_.kernel("lpv_resolve_geometry");
+  transmittanceKernel_ = program_.kernel("lpv_transmittance");
   propagate_ = program_.kernel("lpv_propagate");
+  toLookupGrid_ = program_.kernel("lpv_lookup_grid");
   lookup_ = program_.kernel("lpv_lookup");
   size_t cells = cellsPerGrid() * cascades_, nodes = nodesPerGrid() * cascades_;
   layout_ = cl::Buffer(ctx, size_t(cascades_) * 16, CL_MEM_READ_ONLY, "lpv cascade layout");
   gridAcc_ = cl::Buffer(ctx, cells * 3 * 4 * 8, CL_MEM_READ_WRITE, "lpv injection sums");
   geometryAcc_ = cl::Buffer(ctx, nodes * 2 * 4 * 8, CL_MEM_READ_WRITE, "lpv geometry sums");
-  size_t gridBytes = (cells * 12 + 2 * kPad) * sizeof(float);
+  size_t gridBytes = (kPad + planeStride() * 12 * cascades_) * sizeof(float);
   for (cl::Buffer& g : grids_) {
     g = cl::Buffer(ctx, gridBytes, CL_MEM_READ_WRITE, "lpv grid");
     ctx.fill(g, 0.0f);  // the padding stays 0
@@ -73,6 +85,9 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
   ctx.fill(accumulated_, 0.0f);
   geometry_ = cl::Buffer(ctx, nodes * 16, CL_MEM_READ_WRITE, "lpv geometry volume");
   ctx.fill(geometry_, 0.0f);
+  transmittance_ = cl::Buffer(ctx, (kPad + planeStride() * 30 * cascades_) * sizeof(float), CL_MEM_READ_WRITE,
+                              "lpv face transmittances");
+  lookupGrid_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv lookup grid");
   // One row of cells per work-group: many groups, which PoCL spreads over the cores.
   propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * cascades_);
   propagateRange_.local[0] = size_t(n_ / lanes_);
@@ -81,7 +96,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
 
 uint64_t LpvVolume::bytes() const {
   return layout_.bytes() + gridAcc_.bytes() + geometryAcc_.bytes() + grids_[0].bytes() + grids_[1].bytes() +
-         accumulated_.bytes() + geometry_.bytes();
+         accumulated_.bytes() + geometry_.bytes() + transmittance_.bytes() + lookupGrid_.bytes();
 }
 
 void LpvVolume::begin(const std::vector<LpvCascade>& layout, float injectionFixedScale) {
@@ -128,10 +143,10 @@ void LpvVolume::resolve(bool geometry) {
 void LpvVolume::setInjected(const std::vector<glm::vec4>& coefficients) {
   size_t cells = cellsPerGrid();
   if (coefficients.size() != cells * 3 * cascades_) throw Error("lpv: injected grid of the wrong size");
-  std::vector<float> planes(cells * 12 * cascades_ + 2 * kPad, 0.0f);
+  std::vector<float> planes(kPad + planeStride() * 12 * cascades_, 0.0f);
   for (size_t i = 0; i < coefficients.size(); ++i) {  // i = (k·3 + ch)·cells + cell
     size_t kch = i / cells, cell = i % cells;
-    for (int c = 0; c < 4; ++c) planes[kPad + (kch * 4 + c) * cells + cell] = coefficients[i][c];
+    for (int c = 0; c < 4; ++c) planes[kPad + (kch * 4 + c) * planeStride() + cell] = coefficients[i][c];
   }
   ctx_.write(grids_[0], planes.data(), planes.size() * sizeof(float));
   ctx_.write(accumulated_, planes.data(), planes.size() * sizeof(float));
@@ -144,7 +159,7 @@ std::vector<glm::vec4> LpvVolume::readGrid(const cl::Buffer& b) {
   std::vector<glm::vec4> out(cells * 3 * cascades_);
   for (size_t i = 0; i < out.size(); ++i) {
     size_t kch = i / cells, cell = i % cells;
-    for (int c = 0; c < 4; ++c) out[i][c] = planes[kPad + (kch * 4 + c) * cells + cell];
+    for (int c = 0; c < 4; ++c) out[i][c] = planes[kPad + (kch * 4 + c) * planeStride() + cell];
   }
   return out;
 }
@@ -168,18 +183,26 @@ void LpvVolume::setGeometry(const std::vector<glm::vec4>& nodeValues) {
 }
 
 void LpvVolume::propagate(int iterations, bool blocking) {
+  if (blocking && iterations > 1) {
+    transmittanceKernel_.args(geometry_, transmittance_);
+    ctx_.launch(transmittanceKernel_, cl::NDRange::d3(cellsPerGrid(), 6, size_t(cascades_)), "lpv: propagate");
+  }
   for (int i = 0; i < iterations; ++i) {
     // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
-    propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, geometry_, int(blocking && i > 0));
+    propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, transmittance_,
+                    int(blocking && i > 0));
     ctx_.launch(propagate_, propagateRange_, "lpv: propagate");
     current_ = 1 - current_;
   }
 }
 
 void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out) {
+  toLookupGrid_.args(accumulated_, layout_, lookupGrid_);
+  ctx_.launch(toLookupGrid_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: lookup");
   lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
-               accumulated_, out);
-  ctx_.launch(lookup_, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 4), 16, 4), "lpv: lookup");
+               lookupGrid_, out);
+  size_t groups = (size_t(g.width) + vw_ - 1) / vw_;  // GI_VW pixels per work-item
+  ctx_.launch(lookup_, cl::NDRange::d2(cl::roundUp(groups, 16), cl::roundUp(g.height, 4), 16, 4), "lpv: lookup");
 }
 
 }  // namespace gi

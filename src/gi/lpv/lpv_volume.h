@@ -36,7 +36,8 @@ float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveSha
 class LpvVolume {
 public:
   static constexpr int kRunLength = 16;  // texels a work-item merges before its atomic adds
-  static constexpr int kPad = 16;        // floats before and after the grid planes (lpv.cl)
+  static constexpr int kPad = 16;        // floats before the grid planes (lpv.cl)
+  static constexpr int kSkew = 32;       // floats after each plane (lpv.cl LPV_SKEW: planes not 2^k apart)
   static constexpr float kGeometryFixedScale = 1099511627776.0f;  // 2^40
 
   LpvVolume(cl::Context& ctx, int resolution, int cascadeCount);
@@ -45,6 +46,7 @@ public:
   int cascadeCount() const { return cascades_; }
   size_t cellsPerGrid() const { return size_t(n_) * n_ * n_; }
   size_t nodesPerGrid() const { return size_t(n_ + 1) * (n_ + 1) * (n_ + 1); }
+  size_t planeStride() const { return cellsPerGrid() + kSkew; }  // floats from one grid plane to the next
   uint64_t bytes() const;
 
   // Per frame, in this order.
@@ -56,7 +58,10 @@ public:
   void addGeometryRsm(const GiView& view, const cl::Buffer& position, const cl::Buffer& normal, int res);
   void addGeometryCamera(const GBuffer& g);
   void resolve(bool geometry);  // sums -> float grids (the geometry volume only when asked)
+  // `iterations` gather steps; with `blocking`, first the per-face transmittances from the
+  // geometry volume (static over the steps), which block every step but the first.
   void propagate(int iterations, bool blocking);
+  // Converts the accumulated grid into the lookup grid, then writes L = ρ/π · E per pixel.
   void lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out);
 
   // For tests, coefficients as float4 [cascade][rgb][cell] (the device keeps planes, lpv.cl):
@@ -73,11 +78,12 @@ private:
   std::vector<glm::vec4> readGrid(const cl::Buffer& b);
 
   cl::Context& ctx_;
-  int n_, cascades_, lanes_;
+  int n_, cascades_, vw_, lanes_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
   float injectionScale_ = 1.0f;
   cl::Program program_;
-  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, propagate_, lookup_;
-  cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_;
+  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, transmittanceKernel_, propagate_,
+      toLookupGrid_, lookup_;
+  cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, transmittance_, lookupGrid_;
   cl::NDRange propagateRange_;
   int current_ = 0;
 };
