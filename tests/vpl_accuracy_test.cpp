@@ -144,7 +144,7 @@ TEST(VplAccuracy, SponzaSmallFullImageSsim) {
     return metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(raster, s.exposure)).mean;
   };
   double diffuse = ssimOf(p.raster);
-  // The same frame with the specular pass, against the same (already validated) reference.
+  // The same frame with the receivers' GGX lobe, against the same (already validated) reference.
   multi.push_back("vpl.specular=true");
   RenderSettings rs;
   rs.width = 2 * 96;

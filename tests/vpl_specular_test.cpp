@@ -1,7 +1,8 @@
-// `vpl.specular` (kernels/gi/vpl/vpl_specular.cl; docs/techniques/vpl.md, "Specular receivers"):
-// the receivers' GGX lobe lit by the VPLs, against a host mirror of the same formula on a small
-// image of the Cornell box made glossy (roughness 0.3, F0 0.04 and a metallic block), with and
-// without visibility rays and bounces; the pass only adds light, and nothing without it.
+// `vpl.specular` (kernels/gi/vpl/vpl_brdf_gather.cl; docs/techniques/vpl.md, "Specular receivers"):
+// the gather with the receivers' full BRDF. Its image minus the diffuse gather's is the GGX lobe
+// lit by the VPLs: against a host mirror of that formula on a small image of the Cornell box made
+// glossy (roughness 0.3, F0 0.04 and a metallic block), with bounces, with and without visibility
+// rays; it only adds light, and nothing on the background.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -39,7 +40,9 @@ TEST(VplSpecular, AddsTheHostGgxSumOverTheVpls) {
     for (int p = 0; p < W * H; ++p) {
       glm::vec3 d(b.pixels[size_t(p) * 3] - a.pixels[size_t(p) * 3], b.pixels[size_t(p) * 3 + 1] - a.pixels[size_t(p) * 3 + 1],
                   b.pixels[size_t(p) * 3 + 2] - a.pixels[size_t(p) * 3 + 2]);
-      for (int c = 0; c < 3; ++c) ASSERT_GE(d[c], -1e-6f * (1.0f + a.pixels[size_t(p) * 3 + c])) << "pixel " << p;
+      // The diffuse terms agree to float rounding (same sum, other kernel).
+      glm::vec3 eps(1e-5f * a.pixels[size_t(p) * 3], 1e-5f * a.pixels[size_t(p) * 3 + 1], 1e-5f * a.pixels[size_t(p) * 3 + 2]);
+      for (int c = 0; c < 3; ++c) ASSERT_GE(d[c], -eps[c] - 1e-9f) << "pixel " << p;
       if (pos[p].w <= 0) {
         EXPECT_EQ(d, glm::vec3(0.0f));
         continue;
@@ -48,12 +51,12 @@ TEST(VplSpecular, AddsTheHostGgxSumOverTheVpls) {
       if (rays) {  // the host has no visibility: compare only where the pass saw no occluder at all
         glm::vec3 all = hostSpecularRadiance(vpls, x, glm::vec3(nrm[p]), glm::normalize(eye - x), glm::vec3(spec[p]),
                                              spec[p].w);
-        EXPECT_LE(d.y, all.y * (1.0f + 1e-4f) + 1e-9f) << "pixel " << p << ": rays added light";
+        EXPECT_LE(d.y, all.y * (1.0f + 1e-4f) + eps.y + 1e-9f) << "pixel " << p << ": rays added light";
         continue;
       }
       glm::vec3 expected =
           hostSpecularRadiance(vpls, x, glm::vec3(nrm[p]), glm::normalize(eye - x), glm::vec3(spec[p]), spec[p].w);
-      for (int c = 0; c < 3; ++c) ASSERT_NEAR(d[c], expected[c], 2e-4f * expected[c] + 1e-8f) << "pixel " << p;
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(d[c], expected[c], 2e-4f * expected[c] + eps[c] + 1e-9f) << "pixel " << p;
       ++compared;
       glossy += expected.y > 1e-3f * a.pixels[size_t(p) * 3 + 1];
     }

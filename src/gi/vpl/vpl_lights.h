@@ -63,7 +63,7 @@ std::vector<HostVpl> hostGenerateVpls(const GiView& rsmView, const std::vector<g
 // generation: (base u, multiplier u, base v, multiplier v).
 glm::vec3 hostBounceDirection(glm::vec3 n, int walk, int generation, int k = 0, int m = 1);
 glm::uvec4 bounceSequence(int generation);
-// Host mirror of the specular pass (kernels/gi/vpl/vpl_specular.cl): receiver at x, shading normal
+// Host mirror of the specular term of kernels/gi/vpl/vpl_brdf_gather.cl: receiver at x, shading normal
 // n, unit direction to the eye wo, specular F0 and roughness; W/(m²·sr).
 glm::vec3 hostSpecularRadiance(const std::vector<HostVpl>& vpls, glm::vec3 x, glm::vec3 n, glm::vec3 wo, glm::vec3 f0,
                                float roughness);

@@ -22,39 +22,43 @@ public:
   void render(const FrameResources& f, cl::Buffer& indirect) override {
     generator_->generate(f.rsms, f.params.getInt("vpl.count"), f.params.getFloat("vpl.d_min"), vpls_,
                          visibility_.bounces(f));
-    gather_->resize(f.gbuffer.width, f.gbuffer.height, 1, 1);
     visibility_.update(f);
+    if (f.params.getBool("vpl.specular")) {
+      brdfGather(f, indirect);
+      return;
+    }
+    gather_->resize(f.gbuffer.width, f.gbuffer.height, 1, 1);
     gather_->deinterleave(f.gbuffer);
     gather_->shade(vpls_, &visibility_);
     gather_->reinterleaveRadiance(f.gbuffer, indirect);
-    if (f.params.getBool("vpl.specular")) addSpecular(f, indirect);
   }
 
 private:
-  // kernels/gi/vpl/vpl_specular.cl: the receivers' GGX lobe lit by the same VPLs, added to `indirect`.
-  void addSpecular(const FrameResources& f, cl::Buffer& indirect) {
+  // vpl.specular: kernels/gi/vpl/vpl_brdf_gather.cl, the same all-pairs sum with the receivers' full
+  // BRDF (Lambert + GGX), one shadow ray per facing pair for both terms.
+  void brdfGather(const FrameResources& f, cl::Buffer& indirect) {
     bool rays = visibility_.enabled();
-    cl::Kernel& k = rays ? specularVisible_ : specular_;
+    cl::Kernel& k = rays ? brdfVisible_ : brdf_;
     if (!k.get()) {
-      (rays ? specularVisibleProgram_ : specularProgram_) =
-          f.ctx.buildProgram("kernels/gi/vpl/vpl_specular.cl", visibility_.defines());
-      k = (rays ? specularVisibleProgram_ : specularProgram_).kernel("vpl_specular");
+      cl::Program& program = rays ? brdfVisibleProgram_ : brdfProgram_;
+      program = f.ctx.buildProgram("kernels/gi/vpl/vpl_brdf_gather.cl", visibility_.defines());
+      k = program.kernel("vpl_brdf_gather");
     }
     const GBuffer& g = f.gbuffer;
     int pixels = g.width * g.height;
-    k.args(pixels, g.view.eye[0], g.view.eye[1], g.view.eye[2], g.position, g.normal, g.specular, vpls_.vpls,
-           vpls_.count, indirect);
-    visibility_.setArgs(k, 10);
+    k.args(pixels, g.view.eye[0], g.view.eye[1], g.view.eye[2], g.position, g.normal, g.albedo, g.specular,
+           vpls_.vpls, vpls_.count, indirect);
+    visibility_.setArgs(k, 11);
     size_t items = (size_t(pixels) + f.ctx.vectorWidth() - 1) / f.ctx.vectorWidth();
-    f.ctx.launch(k, cl::NDRange::d1(cl::roundUp(items, 16), 16), rays ? "vpl: specular + rays" : "vpl: specular");
+    f.ctx.launch(k, cl::NDRange::d1(cl::roundUp(items, 16), 16), rays ? "vpl: shade brdf + rays" : "vpl: shade brdf");
   }
 
   std::unique_ptr<VplGenerator> generator_;
   std::unique_ptr<InterleavedGather> gather_;
   VplVisibility visibility_;
   VplSet vpls_;
-  cl::Program specularProgram_, specularVisibleProgram_;
-  cl::Kernel specular_, specularVisible_;
+  cl::Program brdfProgram_, brdfVisibleProgram_;
+  cl::Kernel brdf_, brdfVisible_;
 };
 
 class IgiTechnique : public Technique {
@@ -110,8 +114,8 @@ TechniqueInfo vplTechniqueInfo() {
             p.addFloat("vpl.d_min", 0.0, 0.0, 100.0,
                        "distance clamp of the 1/d² term in metres; 0 = 0.5 x the RSM texel footprint at each VPL");
             p.addBool("vpl.specular", false,
-                      "also shade the receivers' GGX lobe with the VPLs (a second all-pairs pass; the diffuse gather "
-                      "of ALGORITHMS.md §2 alone when false)");
+                      "gather with the receivers' full BRDF, Lambert + GGX lobe (kernels/gi/vpl/vpl_brdf_gather.cl); "
+                      "false = the diffuse gather of ALGORITHMS.md §2");
           },
           [] { return std::make_unique<VplTechnique>(); }};
 }
