@@ -12,10 +12,11 @@
 //
 // One work-item = GI_VW consecutive pixels (row-major), each VPL broadcast to all lanes.
 #include "common/brdf.h"
+#include "common/math.h"
 #include "common/vector_width.h"
 #include "gi/vpl/vpl_visibility.h"
 
-kernel void vpl_brdf_gather(int pixels, float eyeX, float eyeY, float eyeZ, global const float4* position,
+kernel void vpl_brdf_gather(int pixels, GiView camera, global const float4* position,
                             global const float4* normal, global const float4* albedo, global const float4* specular,
                             global const float4* vpls, int count, global float4* radiance GI_VPL_VISIBILITY_PARAMS) {
   GI_VPL_VISIBILITY_BEGIN
@@ -38,9 +39,16 @@ kernel void vpl_brdf_gather(int pixels, float eyeX, float eyeY, float eyeZ, glob
   floatV f0r = vloadV(0, sr), f0g = vloadV(0, sg), f0b = vloadV(0, sb);
   floatV a = fmax(vloadV(0, rough) * vloadV(0, rough), GI_MIN_GGX_ALPHA);
   floatV a2 = a * a;
-  floatV ox = eyeX - px, oy = eyeY - py, oz = eyeZ - pz;
-  floatV oinv = rsqrt(fmax(ox * ox + oy * oy + oz * oz, 1e-20f));
-  ox *= oinv; oy *= oinv; oz *= oinv;
+  // ω_o, towards the viewer (as the direct pass: one direction for an orthographic camera).
+  floatV ox, oy, oz;
+  if (camera.orthographic) {
+    float3 w = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
+    ox = (floatV)(w.x); oy = (floatV)(w.y); oz = (floatV)(w.z);
+  } else {
+    ox = camera.eye[0] - px; oy = camera.eye[1] - py; oz = camera.eye[2] - pz;
+    floatV oinv = rsqrt(fmax(ox * ox + oy * oy + oz * oz, 1e-20f));
+    ox *= oinv; oy *= oinv; oz *= oinv;
+  }
   floatV nv = nx * ox + ny * oy + nz * oz;
   // The specular lobe needs the viewer above the shading normal (brdf_eval()).
   floatV specOn = GI_SEL((floatV)(0.0f), vloadV(0, on), nv > 0.0f);

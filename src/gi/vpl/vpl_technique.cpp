@@ -46,9 +46,8 @@ private:
     }
     const GBuffer& g = f.gbuffer;
     int pixels = g.width * g.height;
-    k.args(pixels, g.view.eye[0], g.view.eye[1], g.view.eye[2], g.position, g.normal, g.albedo, g.specular,
-           vpls_.vpls, vpls_.count, indirect);
-    visibility_.setArgs(k, 11);
+    k.args(pixels, g.view, g.position, g.normal, g.albedo, g.specular, vpls_.vpls, vpls_.count, indirect);
+    visibility_.setArgs(k, 9);
     size_t items = (size_t(pixels) + f.ctx.vectorWidth() - 1) / f.ctx.vectorWidth();
     f.ctx.launch(k, cl::NDRange::d1(cl::roundUp(items, 16), 16), rays ? "vpl: shade brdf + rays" : "vpl: shade brdf");
   }
