@@ -29,8 +29,10 @@ int main(int argc, char** argv) {
                 "(anisotropic <= 10 ms), 6 diffuse cones half-res + upsample <= 15 ms, full res <= 40 ms, "
                 "specular cone <= 10 ms\n");
     for (int res : {32, 64, 128, 256})
-      std::printf("memory %3d^3: isotropic %7.1f MB, anisotropic %7.1f MB\n", res,
-                  VoxelScene::bytesFor(res, false) / 1e6, VoxelScene::bytesFor(res, true) / 1e6);
+      std::printf("memory %3d^3: isotropic %7.1f MB, anisotropic %7.1f MB; SH voxels: isotropic %7.1f MB, "
+                  "anisotropic %7.1f MB\n", res, VoxelScene::bytesFor(res, false) / 1e6,
+                  VoxelScene::bytesFor(res, true) / 1e6, VoxelScene::bytesFor(res, false, true) / 1e6,
+                  VoxelScene::bytesFor(res, true, true) / 1e6);
     struct Config {
       std::vector<std::string> sets;
       std::string title;
@@ -44,6 +46,10 @@ int main(int argc, char** argv) {
     if (!quick) {
       configs.push_back({{"vct.resolution=128", "vct.mips=isotropic", "vct.cones=9"}, "128^3 isotropic, 9 cones (ten Brug)"});
       configs.push_back({{"vct.resolution=128", "vct.bounces=2"}, "128^3 anisotropic, second bounce"});
+      configs.push_back({{"vct.resolution=128", "vct.mips=isotropic", "vct.voxels=sh", "vct.downsample=2"},
+                         "128^3 SH voxels, isotropic mips, half resolution"});
+      configs.push_back({{"vct.resolution=128", "vct.voxels=sh", "vct.downsample=2"},
+                         "128^3 SH voxels, anisotropic mips, half resolution"});
       configs.push_back({{"vct.resolution=128", "vct.static=1"}, "128^3 anisotropic, voxelized once (static)"});
       configs.push_back({{"vct.resolution=32"}, "32^3 anisotropic"});
       configs.push_back({{"vct.resolution=64"}, "64^3 anisotropic"});

@@ -12,6 +12,7 @@
 #include <queue>
 #include <random>
 
+#include "cl/gather_width.h"
 #include "gi/vct/voxel_scene.h"
 #include "accuracy_support.h"
 #include "reference_scenes.h"
@@ -86,7 +87,7 @@ size_t levelOffset(int N, int level) {
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
 struct TraceParams {
   float startOffset = 0, maxDistance = 0, stepFactor = 0.5f, aoLambda = 0;
-  int32_t anisotropic = 0, applyAo = 0, pad[2] = {0, 0};
+  int32_t anisotropic = 0, applyAo = 0, footprintInFront = 0, pad = 0;
 };
 
 struct ConeOut {
@@ -94,15 +95,19 @@ struct ConeOut {
   std::vector<float> occlusion;
 };
 
+// sh: read the SH voxels (vct.voxels=sh) instead of the isotropic radiance.
 ConeOut traceCones(VoxelScene& vs, const TraceParams& tp, const std::vector<glm::vec4>& cones,
-                   const std::vector<glm::vec4>& dirs) {
+                   const std::vector<glm::vec4>& dirs, bool sh = false) {
   cl::Context& ctx = test::context();
-  cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl", {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}});
+  cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
+                                      {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"}});
   cl::Kernel k = prog.kernel("vct_trace_cones");
   cl::Buffer c = ctx.upload(cones, "cones"), d = ctx.upload(dirs, "dirs");
   cl::Buffer out(ctx, cones.size() * 16), occ(ctx, cones.size() * 4);
   const cl::Buffer& aniso = tp.anisotropic ? vs.aniso() : vs.iso();
-  k.args(vs.grid(), tp, vs.iso(), aniso, c, d, int(cones.size()), out, occ);
+  const cl::Buffer& shIso = sh ? vs.sh() : vs.iso();
+  const cl::Buffer& shAniso = sh && tp.anisotropic ? vs.shAniso() : shIso;
+  k.args(vs.grid(), tp, vs.iso(), aniso, shIso, shAniso, c, d, int(cones.size()), out, occ);
   ctx.launch(k, cl::NDRange::d1(cl::roundUp(cones.size(), 64), 64));
   ConeOut r;
   r.radiance = ctx.download<glm::vec4>(out);
@@ -112,22 +117,27 @@ ConeOut traceCones(VoxelScene& vs, const TraceParams& tp, const std::vector<glm:
 }
 
 // ---- host mirror of voxel_grid.h / cone.h ---------------------------------------------------
+// l <= 1 real SH basis of ALGORITHMS.md §4 at unit d.
+glm::vec4 shBasis(glm::vec3 d) { return glm::vec4(0.282095f, 0.488603f * d.y, 0.488603f * d.z, 0.488603f * d.x); }
+
 struct HostMips {
   int N = 0, levels = 0;
   std::vector<glm::vec4> iso, aniso;
-  glm::vec4 voxel(const glm::vec4* vol, int n, int x, int y, int z) const {
-    if (x < 0 || y < 0 || z < 0 || x >= n || y >= n || z >= n) return glm::vec4(0.0f);
-    return vol[(size_t(z) * n + y) * n + x];
-  }
-  glm::vec4 trilinear(const glm::vec4* vol, int n, glm::vec3 p, float scale) const {
+  bool shVoxels = false;            // radiance from the SH chains (3 float4 per voxel), opacity from iso/aniso
+  std::vector<glm::vec4> sh, shAniso;
+  // Trilinear filter of fetch(voxel index) over a volume of n³ voxels (outside: 0).
+  template <class Fetch>
+  static glm::vec4 trilinear(int n, glm::vec3 p, float scale, Fetch fetch) {
     glm::vec3 u = p * scale - 0.5f, fl = glm::floor(u), f = u - fl;
     glm::ivec3 i0(fl);
     glm::vec4 acc(0.0f);
     for (int dz = 0; dz < 2; ++dz)
       for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
+          int x = i0.x + dx, y = i0.y + dy, z = i0.z + dz;
+          if (x < 0 || y < 0 || z < 0 || x >= n || y >= n || z >= n) continue;
           float w = (dz ? f.z : 1 - f.z) * (dy ? f.y : 1 - f.y) * (dx ? f.x : 1 - f.x);
-          acc += w * voxel(vol, n, i0.x + dx, i0.y + dy, i0.z + dz);
+          acc += w * fetch((size_t(z) * n + y) * n + x);
         }
     return acc;
   }
@@ -135,14 +145,26 @@ struct HostMips {
     size_t n = size_t(N >> level);
     return 6 * (levelOffset(N, level) - size_t(N) * N * N) + size_t(dir) * n * n * n;
   }
+  // One volume: premultiplied radiance and opacity; SH voxels: the coefficients filtered, then
+  // evaluated towards the cone's apex (−d).
+  glm::vec4 volume(bool isoChain, size_t offset, int n, glm::vec3 p, float scale, glm::vec3 d) const {
+    const glm::vec4* radiance = (isoChain ? iso : aniso).data() + offset;
+    glm::vec4 c = trilinear(n, p, scale, [&](size_t i) { return radiance[i]; });
+    if (!shVoxels) return c;
+    const glm::vec4* coeffs = (isoChain ? sh : shAniso).data() + 3 * offset;
+    glm::vec4 Y = shBasis(-d);
+    for (int ch = 0; ch < 3; ++ch)
+      c[ch] = glm::dot(trilinear(n, p, scale, [&](size_t i) { return coeffs[3 * i + ch]; }), Y);
+    return c;
+  }
   glm::vec4 levelSample(int level, glm::vec3 p, glm::vec3 d, bool an) const {
     int n = N >> level;
     float scale = 1.0f / float(1 << level);
-    if (!an || level == 0) return trilinear(iso.data() + levelOffset(N, level), n, p, scale);
+    if (!an || level == 0) return volume(true, levelOffset(N, level), n, p, scale, d);
     glm::vec3 w = d * d;
-    return w.x * trilinear(aniso.data() + anisoOffset(level, d.x >= 0 ? 0 : 1), n, p, scale) +
-           w.y * trilinear(aniso.data() + anisoOffset(level, d.y >= 0 ? 2 : 3), n, p, scale) +
-           w.z * trilinear(aniso.data() + anisoOffset(level, d.z >= 0 ? 4 : 5), n, p, scale);
+    return w.x * volume(false, anisoOffset(level, d.x >= 0 ? 0 : 1), n, p, scale, d) +
+           w.y * volume(false, anisoOffset(level, d.y >= 0 ? 2 : 3), n, p, scale, d) +
+           w.z * volume(false, anisoOffset(level, d.z >= 0 ? 4 : 5), n, p, scale, d);
   }
   glm::vec4 sample(glm::vec3 p, glm::vec3 d, float level, bool an) const {
     level = std::clamp(level, 0.0f, float(levels - 1));
@@ -150,6 +172,8 @@ struct HostMips {
     float f = level - float(l0);
     glm::vec4 c = levelSample(l0, p, d, an);
     if (f > 0 && l0 + 1 < levels) c = glm::mix(c, levelSample(l0 + 1, p, d, an), f);
+    if (shVoxels)
+      for (int ch = 0; ch < 3; ++ch) c[ch] = std::max(c[ch], 0.0f);  // l <= 1 ringing behind surfaces
     return c;
   }
   // cone.h's march, written independently from its comment.
@@ -177,6 +201,25 @@ struct HostMips {
   }
 };
 
+// Front and back child (indices in the child volume of edge nc) of column (i, j) of parent
+// (x, y, z) seen along direction dir (+x, −x, +y, −y, +z, −z): voxel_light.cl's comment.
+std::pair<size_t, size_t> columnChildren(int dir, int i, int j, int x, int y, int z, int nc) {
+  int axis = dir / 2;
+  bool positive = dir % 2 == 0;
+  glm::ivec3 cf, cb;
+  for (int k = 0, o = 0; k < 3; ++k) {
+    if (k == axis) {
+      cf[k] = positive ? 0 : 1;
+      cb[k] = positive ? 1 : 0;
+    } else {
+      cf[k] = cb[k] = o++ == 0 ? i : j;
+    }
+  }
+  glm::ivec3 b(2 * x, 2 * y, 2 * z);
+  return {(size_t(b.z + cf.z) * nc + b.y + cf.y) * nc + b.x + cf.x,
+          (size_t(b.z + cb.z) * nc + b.y + cb.y) * nc + b.x + cb.x};
+}
+
 // Host anisotropic chain from level 0 (the compositing rule of voxel_light.cl's comment).
 std::vector<glm::vec4> hostAnisotropic(const std::vector<glm::vec4>& level0, int N, int levels) {
   HostMips h;
@@ -187,33 +230,82 @@ std::vector<glm::vec4> hostAnisotropic(const std::vector<glm::vec4>& level0, int
     int n = N >> l, nc = 2 * n;
     for (int dir = 0; dir < 6; ++dir) {
       const glm::vec4* child = l == 1 ? level0.data() : out.data() + h.anisoOffset(l - 1, dir);
-      int axis = dir / 2;
-      bool positive = dir % 2 == 0;
       for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
           for (int x = 0; x < n; ++x) {
             glm::vec4 sum(0.0f);
             for (int j = 0; j < 2; ++j)
               for (int i = 0; i < 2; ++i) {
-                glm::ivec3 cf, cb;
-                for (int k = 0, o = 0; k < 3; ++k) {
-                  if (k == axis) {
-                    cf[k] = positive ? 0 : 1;
-                    cb[k] = positive ? 1 : 0;
-                  } else {
-                    cf[k] = cb[k] = o++ == 0 ? i : j;
-                  }
-                }
-                glm::ivec3 b(2 * x, 2 * y, 2 * z);
-                glm::vec4 f = child[(size_t(b.z + cf.z) * nc + b.y + cf.y) * nc + b.x + cf.x];
-                glm::vec4 k = child[(size_t(b.z + cb.z) * nc + b.y + cb.y) * nc + b.x + cb.x];
-                sum += f + (1.0f - f.w) * k;
+                auto [f, b] = columnChildren(dir, i, j, x, y, z, nc);
+                sum += child[f] + (1.0f - child[f].w) * child[b];
               }
             out[h.anisoOffset(l, dir) + (size_t(z) * n + y) * n + x] = sum * 0.25f;
           }
     }
   }
   return out;
+}
+
+// Host SH chains (3 float4 per voxel) from SH level 0, by the same rules on the coefficients:
+// isotropic = mean of the 8 children; anisotropic = per column front + (1 − α_front)·back, α from
+// the radiance mips (isoLevel0 below level 1, else the radiance volume of the same direction).
+std::vector<glm::vec4> hostShIsotropic(const std::vector<glm::vec4>& shLevel0, int N, int levels) {
+  std::vector<glm::vec4> out(3 * levelOffset(N, levels), glm::vec4(0.0f));
+  std::copy(shLevel0.begin(), shLevel0.end(), out.begin());
+  for (int l = 1; l < levels; ++l) {
+    int n = N >> l, nc = 2 * n;
+    size_t child = levelOffset(N, l - 1), parent = levelOffset(N, l);
+    for (int z = 0; z < n; ++z)
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+          for (int ch = 0; ch < 3; ++ch) {
+            glm::vec4 sum(0.0f);
+            for (int k = 0; k < 8; ++k)
+              sum += out[3 * (child + (size_t(2 * z + (k >> 2)) * nc + 2 * y + ((k >> 1) & 1)) * nc + 2 * x + (k & 1)) + ch];
+            out[3 * (parent + (size_t(z) * n + y) * n + x) + ch] = sum / 8.0f;
+          }
+  }
+  return out;
+}
+
+std::vector<glm::vec4> hostShAnisotropic(const std::vector<glm::vec4>& shLevel0, const std::vector<glm::vec4>& isoLevel0,
+                                         const std::vector<glm::vec4>& radianceAniso, int N, int levels) {
+  HostMips h;
+  h.N = N;
+  std::vector<glm::vec4> out(3 * radianceAniso.size(), glm::vec4(0.0f));
+  for (int l = 1; l < levels; ++l) {
+    int n = N >> l, nc = 2 * n;
+    for (int dir = 0; dir < 6; ++dir) {
+      const glm::vec4* alpha = l == 1 ? isoLevel0.data() : radianceAniso.data() + h.anisoOffset(l - 1, dir);
+      const glm::vec4* child = l == 1 ? shLevel0.data() : out.data() + 3 * h.anisoOffset(l - 1, dir);
+      for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+          for (int x = 0; x < n; ++x)
+            for (int ch = 0; ch < 3; ++ch) {
+              glm::vec4 sum(0.0f);
+              for (int j = 0; j < 2; ++j)
+                for (int i = 0; i < 2; ++i) {
+                  auto [f, b] = columnChildren(dir, i, j, x, y, z, nc);
+                  sum += child[3 * f + ch] + (1.0f - alpha[f].w) * child[3 * b + ch];
+                }
+              out[3 * (h.anisoOffset(l, dir) + (size_t(z) * n + y) * n + x) + ch] = sum * 0.25f;
+            }
+    }
+  }
+  return out;
+}
+
+// Random SH level 0 for the voxels of `level0` that are occupied: per channel random
+// coefficients times the voxel's opacity (premultiplied, as vct_sh_project writes them).
+std::vector<glm::vec4> randomShLevel0(const std::vector<glm::vec4>& level0, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+  std::vector<glm::vec4> sh(3 * level0.size(), glm::vec4(0.0f));
+  for (size_t v = 0; v < level0.size(); ++v)
+    if (level0[v].w > 0)
+      for (int ch = 0; ch < 3; ++ch)
+        sh[3 * v + ch] = level0[v].w * glm::vec4(1.0f + 0.5f * U(rng), U(rng), U(rng), U(rng));
+  return sh;
 }
 
 }  // namespace
@@ -561,14 +653,17 @@ TEST(Vct, FramesAreBitIdentical) {
   o.withAreaLight = false;
   o.spotLight = CornellSpotLight{};
   Scene s = makeCornellBox(o);
-  for (std::string mode : {"isotropic", "anisotropic"}) {
+  const std::vector<std::vector<std::string>> modes = {
+      {"vct.mips=isotropic"}, {"vct.mips=anisotropic"}, {"vct.mips=anisotropic", "vct.voxels=sh"}};
+  for (const std::vector<std::string>& mode : modes) {
     std::vector<std::vector<float>> images;
     for (int run = 0; run < 2; ++run) {
       RenderSettings rs;
       rs.width = 48;
       rs.height = 48;
       rs.technique = "vct";
-      rs.sets = {"vct.resolution=64", "vct.mips=" + mode, "vct.bounces=2", "shadow.resolution=256"};
+      rs.sets = {"vct.resolution=64", "vct.bounces=2", "shadow.resolution=256"};
+      rs.sets.insert(rs.sets.end(), mode.begin(), mode.end());
       Renderer r(test::context(), s, rs);
       r.renderFrame();
       images.push_back(r.indirectRadiance().pixels);
@@ -576,7 +671,7 @@ TEST(Vct, FramesAreBitIdentical) {
     double sum = 0;
     for (float v : images[0]) sum += v;
     EXPECT_GT(sum, 0.0);
-    EXPECT_EQ(0, std::memcmp(images[0].data(), images[1].data(), images[0].size() * sizeof(float))) << mode;
+    EXPECT_EQ(0, std::memcmp(images[0].data(), images[1].data(), images[0].size() * sizeof(float))) << mode.back();
   }
 }
 
@@ -616,4 +711,320 @@ TEST(VctCone, FootprintInFrontKeepsALitPlaneFromLightingItself) {
               indirect[0], indirect[1]);
   EXPECT_GT(indirect[0], 1.0);
   EXPECT_EQ(indirect[1], 0.0);
+}
+
+// ---- SH voxels (vct.voxels=sh, seed 003 §3.4.5) -----------------------------------------------
+
+namespace {
+
+// Host values of the two lobes (voxel_types.h), from their definitions: the l <= 1 projection of
+// L on the front hemisphere is (2π·Y00, π·Y1·n) = (√π, √(3π)/2·n); of max(0, n·ω) it is
+// (√π/2, √(π/3)·n).
+const glm::vec2 kHemisphereLobe(std::sqrt(float(M_PI)), std::sqrt(3.0f * float(M_PI)) / 2.0f);
+const glm::vec2 kCosineLobe(std::sqrt(float(M_PI)) / 2.0f, std::sqrt(float(M_PI) / 3.0f));
+
+}  // namespace
+
+TEST(VctShVoxels, ProjectionIsTheLobeOfTheVoxelSurface) {
+  // Two horizontal strips under a sun at 60° from the vertical: x < 0 one-sided, facing up (+y);
+  // x > 0.2 two-sided (the same quad with both windings: the normals cancel). Every occupied voxel
+  // must hold L·α·(k0, k1·n_y, k1·n_z, k1·n_x) per channel, or (2·k0, 0, 0, 0) where two-sided.
+  Scene s;
+  s.name = "strips";
+  s.materials.push_back(test::diffuseMaterial(0.5f, 0.6f, 0.7f));
+  const float y = 0.13f;
+  test::addTriangle(s, {-1, y, -1}, {-1, y, 1}, {0, y, 1}, 0);
+  test::addTriangle(s, {-1, y, -1}, {0, y, 1}, {0, y, -1}, 0);
+  for (int side = 0; side < 2; ++side) {
+    glm::vec3 a(0.2f, y, -1), b(0.2f, y, 1), c(1, y, 1), d(1, y, -1);
+    if (side == 0) {
+      test::addTriangle(s, a, b, c, 0);
+      test::addTriangle(s, a, c, d, 0);
+    } else {
+      test::addTriangle(s, a, c, b, 0);
+      test::addTriangle(s, a, d, c, 0);
+    }
+  }
+  s.computeBounds();
+  s.bounds.extend(glm::vec3(0, 1, 0));
+  s.bounds.extend(glm::vec3(0, -1, 0));
+  GiLight sun{};
+  sun.type = GI_LIGHT_DIRECTIONAL;
+  glm::vec3 dir = glm::normalize(glm::vec3(std::sin(M_PI / 3), -std::cos(M_PI / 3), 0.0));
+  for (int k = 0; k < 3; ++k) {
+    sun.direction[k] = dir[k];
+    sun.intensity[k] = 2.0f + k;
+  }
+  sun.shadow_map = -1;
+  s.lights.push_back(sun);
+  cl::Context& ctx = test::context();
+  DeviceScene ds(ctx, s);
+  ShadowMapSet shadows;
+  shadows.viewTable = ctx.upload(std::vector<GiView>{}, "views");
+  shadows.offsetTable = ctx.upload(std::vector<uint32_t>{}, "offsets");
+  shadows.depths = cl::Buffer(ctx, 4);
+  VoxelScene vs(ctx, s, 32);
+  vs.voxelize(ds);
+  vs.inject(ds, shadows);
+  const GiVoxelGrid& g = vs.grid();
+  int N = g.resolution;
+  for (ShLobe lobe : {ShLobe::Hemisphere, ShLobe::Cosine}) {
+    vs.projectSh(lobe);
+    std::vector<glm::vec4> iso = ctx.download<glm::vec4>(vs.iso()), sh = ctx.download<glm::vec4>(vs.sh());
+    ctx.profiler().discard();
+    glm::vec2 k = lobe == ShLobe::Hemisphere ? kHemisphereLobe : kCosineLobe;
+    size_t oneSided = 0, twoSided = 0;
+    for (size_t v = 0; v < vs.voxelCount(); ++v) {
+      if (iso[v].w == 0.0f) {
+        for (int ch = 0; ch < 3; ++ch) ASSERT_EQ(sh[3 * v + ch], glm::vec4(0.0f)) << "empty voxel " << v;
+        continue;
+      }
+      float x = g.origin[0] + (float(v % N) + 0.5f) * g.voxel_size;
+      ASSERT_TRUE(x < 0.05f || x > 0.15f) << "voxel " << v << " between the strips";
+      bool both = x > 0.1f;
+      (both ? twoSided : oneSided)++;
+      glm::vec4 lobeN = both ? glm::vec4(2.0f * k.x, 0, 0, 0) : glm::vec4(k.x, k.y, 0, 0);  // n = +y
+      for (int ch = 0; ch < 3; ++ch)
+        for (int c = 0; c < 4; ++c)
+          ASSERT_NEAR(sh[3 * v + ch][c], iso[v][ch] * lobeN[c], 2e-5f * iso[v][ch]) << "voxel " << v << " channel " << ch;
+    }
+    EXPECT_GE(oneSided, size_t(15 * 30));
+    EXPECT_GE(twoSided, size_t(12 * 30));
+  }
+  // What the hemisphere lobe is for: the irradiance its l <= 1 reconstruction gives a plane facing
+  // the voxel is exactly π·L (host quadrature: ∫ max(0, f(ω))·cos dω over the facing hemisphere).
+  double E = 0;
+  const int M = 2000;
+  for (int i = 0; i < M; ++i) {
+    double mu = (i + 0.5) / M;  // cosine between the arriving light's reverse direction and the voxel normal
+    double f = kHemisphereLobe.x * 0.282095 + kHemisphereLobe.y * 0.488603 * mu;
+    E += 2.0 * M_PI * std::max(f, 0.0) * mu / M;
+  }
+  EXPECT_NEAR(E, M_PI, 1e-4);
+}
+
+TEST(VctShVoxels, MipsMatchHostFilters) {
+  cl::Context& ctx = test::context();
+  Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
+  VoxelScene vs(ctx, s, 32);
+  int N = 32, levels = vs.grid().levels;
+  std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 12);
+  std::vector<glm::vec4> shLevel0 = randomShLevel0(level0, 13);
+  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  ctx.fill(vs.accumulators(), 0u);
+  vs.projectSh(ShLobe::Hemisphere);  // allocates; level 0 is then replaced by the random one
+  ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
+  for (bool an : {false, true}) {
+    vs.buildMips(an);
+    vs.buildShMips(an);
+    std::vector<glm::vec4> device = ctx.download<glm::vec4>(an ? vs.shAniso() : vs.sh());
+    std::vector<glm::vec4> host =
+        an ? hostShAnisotropic(shLevel0, level0, ctx.download<glm::vec4>(vs.aniso()), N, levels)
+           : hostShIsotropic(shLevel0, N, levels);
+    ctx.profiler().discard();
+    ASSERT_EQ(device.size(), host.size());
+    float worst = 0;
+    for (size_t i = 0; i < host.size(); ++i)
+      for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(device[i][c] - host[i][c]));
+    std::printf("SH voxel mips (%s) vs host: max abs difference %.2e\n", an ? "anisotropic" : "isotropic", worst);
+    EXPECT_LT(worst, 1e-6f);
+  }
+}
+
+TEST(VctShVoxels, MarchMatchesHostMirror) {
+  cl::Context& ctx = test::context();
+  Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
+  VoxelScene vs(ctx, s, 32);
+  HostMips h;
+  h.N = 32;
+  h.levels = vs.grid().levels;
+  h.shVoxels = true;
+  std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 14);
+  for (auto& v : level0) v *= 0.3f;  // keep cones from saturating in a step or two
+  std::vector<glm::vec4> shLevel0 = randomShLevel0(level0, 15);
+  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  ctx.fill(vs.accumulators(), 0u);
+  vs.projectSh(ShLobe::Hemisphere);  // allocates; level 0 is then replaced by the random one
+  ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  std::vector<glm::vec4> cones, dirs;
+  for (int i = 0; i < 200; ++i) {
+    glm::vec3 d = glm::normalize(glm::vec3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f) + glm::vec3(1e-3f));
+    cones.emplace_back(U(rng) * 32, U(rng) * 32, U(rng) * 32, 0.02f + U(rng));
+    dirs.emplace_back(d, 8.0f + 40.0f * U(rng));
+  }
+  for (bool an : {false, true}) {
+    vs.buildMips(an);
+    vs.buildShMips(an);
+    h.iso = ctx.download<glm::vec4>(vs.iso());
+    h.sh = ctx.download<glm::vec4>(vs.sh());
+    if (an) {
+      h.aniso = ctx.download<glm::vec4>(vs.aniso());
+      h.shAniso = ctx.download<glm::vec4>(vs.shAniso());
+    }
+    TraceParams tp;
+    tp.anisotropic = an;
+    tp.stepFactor = 0.4f;
+    ConeOut dev = traceCones(vs, tp, cones, dirs, true);
+    float worst = 0, largest = 0;
+    for (size_t i = 0; i < cones.size(); ++i) {
+      glm::vec4 ref = h.cone(glm::vec3(cones[i]), glm::vec3(dirs[i]), cones[i].w, dirs[i].w, tp.stepFactor, an);
+      for (int c = 0; c < 4; ++c) {
+        worst = std::max(worst, std::abs(ref[c] - dev.radiance[i][c]));
+        largest = std::max(largest, std::abs(ref[c]));
+      }
+    }
+    std::printf("SH voxel cones (%s mips) vs host march: max abs difference %.2e (largest value %.3f)\n",
+                an ? "anisotropic" : "isotropic", worst, largest);
+    EXPECT_GT(largest, 0.1f);
+    EXPECT_LT(worst, 2e-4f);
+  }
+}
+
+TEST(VctShVoxels, WallLightsConesFromItsFrontOnly) {
+  // A solid wall (x in [16, 20)) of radiance L whose surface faces −x (towards cones from x = 4
+  // travelling along +x) or +x (away from them). Facing the cones it shows, through the hemisphere
+  // lobe's l <= 1 reconstruction seen head-on, 0.5 + 0.75 = 1.25 × L (per unit accumulated
+  // opacity); turned away, −0.25 × L clamped to 0. Narrow and 60° cones, both mip filters.
+  cl::Context& ctx = test::context();
+  Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
+  VoxelScene vs(ctx, s, 32);
+  int N = 32;
+  glm::vec3 L(1, 2, 3);
+  std::vector<glm::vec4> level0(vs.voxelCount(), glm::vec4(0.0f));
+  for (int z = 0; z < N; ++z)
+    for (int y = 0; y < N; ++y)
+      for (int x = 16; x < 20; ++x) level0[(size_t(z) * N + y) * N + x] = glm::vec4(L, 1.0f);
+  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  ctx.fill(vs.accumulators(), 0u);
+  vs.projectSh(ShLobe::Hemisphere);  // allocates; level 0 is then written below
+  std::vector<glm::vec4> cones = {glm::vec4(4.0f, 16.0f, 16.0f, 0.05f), glm::vec4(4.0f, 16.0f, 16.0f, std::tan(float(M_PI) / 6))};
+  std::vector<glm::vec4> dirs(2, glm::vec4(1.0f, 0.0f, 0.0f, 64.0f));
+  for (float facing : {-1.0f, 1.0f}) {
+    std::vector<glm::vec4> shLevel0(3 * level0.size(), glm::vec4(0.0f));
+    for (size_t v = 0; v < level0.size(); ++v)
+      for (int ch = 0; ch < 3; ++ch)
+        shLevel0[3 * v + ch] = level0[v][ch] * glm::vec4(kHemisphereLobe.x, 0, 0, kHemisphereLobe.y * facing);
+    ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
+    for (bool an : {false, true}) {
+      vs.buildMips(an);
+      vs.buildShMips(an);
+      TraceParams tp;
+      tp.anisotropic = an;
+      ConeOut wall = traceCones(vs, tp, cones, dirs, true);
+      ctx.profiler().discard();
+      for (size_t i = 0; i < 2; ++i) {
+        glm::vec4 r = wall.radiance[i];
+        std::printf("SH wall facing %s, %s, cone tan %.2f: a = %.4f, radiance (%.3f %.3f %.3f)\n",
+                    facing < 0 ? "the cone" : "away", an ? "anisotropic" : "isotropic", cones[i].w, r.w, r.x, r.y, r.z);
+        if (i == 0) EXPECT_GE(r.w, 0.99f);
+        EXPECT_GT(r.w, 0.1f);
+        float expected = facing < 0 ? 1.25f : 0.0f;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(r[c], expected * L[c] * r.w, 1e-3f * L[c]);
+      }
+    }
+  }
+}
+
+TEST(VctShVoxels, LitPlaneBarelyLightsItself) {
+  // The lone sunlit plane of FootprintInFrontKeepsALitPlaneFromLightingItself (reference: no
+  // indirect light at all). With isotropic voxels the wide cones gather the plane's own radiance;
+  // SH voxels seen from above their surface at the cones' angles show little (hemisphere lobe:
+  // 0.5 − 0.75·cos 60° = 1/8 of L in the side cones, nothing in the cone along n) or nothing
+  // (ten Brug's cosine lobe: 0.25 − 0.5·cos 60° = 0).
+  Scene s = sunlitPlane(glm::vec3(0.8f), 0.0f, glm::vec3(0, -1, 0), glm::vec3(3.0f));
+  Camera cam;
+  cam.position = glm::vec3(0, 1.5f, 0.01f);
+  cam.target = glm::vec3(0, 0, 0);
+  cam.yfov = 0.9f;
+  s.cameras.push_back(cam);
+  std::vector<std::string> common = {"vct.resolution=32", "vct.specular=0", "vct.mips=isotropic"};
+  auto with = [&](std::vector<std::string> more) {
+    more.insert(more.end(), common.begin(), common.end());
+    return vctIndirectSum(s, more);
+  };
+  double isotropic = with({}), hemisphere = with({"vct.voxels=sh"}),
+         cosine = with({"vct.voxels=sh", "vct.sh_lobe=cosine"});
+  std::printf("lit plane, indirect light on itself (image sum): isotropic voxels %.4f, SH hemisphere %.4f (%.1f %%), "
+              "SH cosine %.6f\n", isotropic, hemisphere, 100.0 * hemisphere / isotropic, cosine);
+  EXPECT_GT(isotropic, 1.0);
+  EXPECT_GT(hemisphere, 0.0);
+  EXPECT_LT(hemisphere, 0.2 * isotropic);
+  EXPECT_LT(cosine, 0.01 * isotropic);
+}
+
+TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
+  // vct_diffuse marches GI_VW pixels per work-item with one shared step schedule (cone_lanes.h);
+  // it must give what the one-cone-at-a-time march (cone.h) gives at the same points, for every
+  // voxel kind, mip filter, footprint mode and AO. A 37×5 "G-buffer" (37 is no multiple of the
+  // lane count) of random points and normals, every 7th pixel background; albedo π so that the
+  // output L = ρ/π·E is E.
+  cl::Context& ctx = test::context();
+  Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
+  VoxelScene vs(ctx, s, 32);
+  const GiVoxelGrid& g = vs.grid();
+  std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 21);
+  for (auto& v : level0) v *= 0.3f;
+  std::vector<glm::vec4> shLevel0 = randomShLevel0(level0, 22);
+  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  ctx.fill(vs.accumulators(), 0u);
+  vs.projectSh(ShLobe::Hemisphere);
+  ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
+  const int W = 37, H = 5, count = W * H;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  std::vector<glm::vec4> pos(count), nrm(count), albedo(count, glm::vec4(float(M_PI), float(M_PI), float(M_PI), 0));
+  for (int i = 0; i < count; ++i) {
+    glm::vec3 p = glm::vec3(g.origin[0], g.origin[1], g.origin[2]) +
+                  glm::vec3(2 + 28 * U(rng), 2 + 28 * U(rng), 2 + 28 * U(rng)) * g.voxel_size;
+    pos[i] = glm::vec4(p, i % 7 == 3 ? 0.0f : 1.0f);
+    nrm[i] = glm::vec4(glm::normalize(glm::vec3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f) + glm::vec3(1e-3f)), 0);
+  }
+  cl::Buffer bPos = ctx.upload(pos, "positions"), bNrm = ctx.upload(nrm, "normals"), bAlb = ctx.upload(albedo, "albedo");
+  cl::Buffer lanesOut(ctx, count * 16), scalarOut(ctx, count * 16);
+  // The device's lane count, and 1 (the GPU code path).
+  for (int lanes : {cl::gatherVectorWidth(ctx), 1}) {
+    for (int sh = 0; sh < 2; ++sh) {
+      cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
+                                          {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"},
+                                           {"GI_VW", std::to_string(lanes)}});
+      cl::Kernel diffuse = prog.kernel("vct_diffuse"), points = prog.kernel("vct_irradiance_points");
+      for (int an = 0; an < 2; ++an) {
+        vs.buildMips(an);
+        if (sh) vs.buildShMips(an);
+        const cl::Buffer& aniso = an ? vs.aniso() : vs.iso();
+        const cl::Buffer& shIso = sh ? vs.sh() : vs.iso();
+        const cl::Buffer& shAniso = sh && an ? vs.shAniso() : shIso;
+        for (int variant = 0; variant < 2; ++variant) {
+          TraceParams tp;
+          tp.startOffset = 1.0f;
+          tp.maxDistance = 32.0f;
+          tp.anisotropic = an;
+          tp.footprintInFront = variant;  // variant 1: footprint in front and AO
+          tp.applyAo = variant;
+          tp.aoLambda = 0.1f;
+          diffuse.args(g, tp, vs.iso(), aniso, shIso, shAniso, W, H, W, H, bPos, bNrm, bAlb, lanesOut);
+          ctx.launch(diffuse, cl::NDRange::d2(cl::roundUp((W + lanes - 1) / lanes, 8), 8, 8, 8));
+          points.args(g, tp, vs.iso(), aniso, shIso, shAniso, bPos, bNrm, count, scalarOut);
+          ctx.launch(points, cl::NDRange::d1(cl::roundUp(count, 64), 64));
+          std::vector<glm::vec4> got = ctx.download<glm::vec4>(lanesOut), ref = ctx.download<glm::vec4>(scalarOut);
+          ctx.profiler().discard();
+          float worst = 0, largest = 0;
+          for (int i = 0; i < count; ++i) {
+            glm::vec3 expected = pos[i].w == 0 ? glm::vec3(0) : glm::vec3(ref[i]) * (variant ? ref[i].w : 1.0f);
+            for (int c = 0; c < 3; ++c) {
+              worst = std::max(worst, std::abs(got[i][c] - expected[c]));
+              largest = std::max(largest, std::abs(expected[c]));
+            }
+          }
+          std::printf("diffuse cones, %d lanes vs one cone at a time (%s voxels, %s mips, %s): max abs difference %.2e "
+                      "(largest %.3f)\n", lanes, sh ? "SH" : "isotropic", an ? "anisotropic" : "isotropic",
+                      variant ? "footprint in front + AO" : "default", worst, largest);
+          EXPECT_GT(largest, 0.05f);
+          EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));
+        }
+      }
+    }
+  }
 }

@@ -34,14 +34,13 @@ inline float vct_footprint(float tanHalf, float t, float h0, float cosN) {
   return fmax(1.0f, fmin(2.0f * tanHalf * t, cap));
 }
 
-inline ConeResult vct_cone(global const float4* iso, global const float4* aniso, int N, int levels, float3 o, float3 d,
-                           float tanHalf, float maxDistance, float stepFactor, float aoLambda, int anisotropic,
-                           float h0, float cosN) {
+inline ConeResult vct_cone(VoxelMips m, float3 o, float3 d, float tanHalf, float maxDistance, float stepFactor,
+                           float aoLambda, float h0, float cosN) {
   ConeResult r;
   float3 c = (float3)(0.0f);
   float a = 0.0f, occ = 0.0f;
   float t = 0.0f;
-  float limit = (float)N;
+  float limit = (float)m.N;
   for (;;) {
     float diameter = vct_footprint(tanHalf, t, h0, cosN);
     float step = fmax(0.5f, stepFactor * diameter);
@@ -53,7 +52,7 @@ inline ConeResult vct_cone(global const float4* iso, global const float4* aniso,
     if (any(p < -margin) || any(p > limit + margin)) break;
     // Footprint in front: below h = 2.5 voxels even level 0 would touch the surface's own voxels.
     if (h0 + t * cosN - 1.0f < 1.5f) continue;
-    float4 s = vox_sample(iso, aniso, N, levels, p, d, log2(diameter), anisotropic);
+    float4 s = vox_sample(m, p, d, log2(diameter));
     if (s.w > 1e-6f) {
       float alpha = fmin(s.w, 1.0f);
       float corrected = 1.0f - powr(1.0f - alpha, step / diameter);
@@ -105,9 +104,8 @@ constant float4 VCT_CONES[9] = {
 #ifdef VCT_CONE_COUNT
 // Irradiance (rgb) at a surface point p (voxel units) with normal n from the diffuse cone set,
 // starting start_offset voxels along n; w: ambient-occlusion visibility 1 − Σ (w_i/π)·occlusion_i.
-inline float4 vct_diffuse_irradiance(global const float4* iso, global const float4* aniso, int N, int levels,
-                                     float3 p, float3 n, float startOffset, float maxDistance, float stepFactor,
-                                     float aoLambda, int anisotropic, int footprintInFront) {
+inline float4 vct_diffuse_irradiance(VoxelMips m, float3 p, float3 n, float startOffset, float maxDistance,
+                                     float stepFactor, float aoLambda, int footprintInFront) {
   float3 t, b;
   orthonormal_basis(n, &t, &b);
   float3 o = p + n * startOffset;
@@ -116,8 +114,8 @@ inline float4 vct_diffuse_irradiance(global const float4* iso, global const floa
   for (int i = 0; i < VCT_CONE_COUNT; ++i) {
     float4 cone = VCT_CONES[i];
     float3 d = normalize(t * cone.x + b * cone.y + n * cone.z);
-    ConeResult r = vct_cone(iso, aniso, N, levels, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
-                            anisotropic, footprintInFront ? startOffset : INFINITY, cone.z);
+    ConeResult r = vct_cone(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
+                            footprintInFront ? startOffset : INFINITY, cone.z);
     E += cone.w * r.radiance.xyz;
     occlusion += cone.w * GI_INV_PI * r.occlusion;
   }

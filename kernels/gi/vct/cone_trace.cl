@@ -1,7 +1,12 @@
 // The cone-traced passes of `vct` (ALGORITHMS.md §5; cone.h for the march and the cone sets).
-// Build defines: GI_VCT_CONES (6 or 9), GI_DOWN (diffuse tracing every GI_DOWN-th pixel).
+// Build defines: GI_VCT_CONES (6 or 9), GI_DOWN (diffuse tracing every GI_DOWN-th pixel), GI_VW
+// (pixels per work-item of vct_diffuse, common/vector_width.h), GI_VCT_SH
+// (1: SH voxels, read from `sh` / `shAniso`; voxel_grid.h).
+// Every kernel takes the four mip chains iso, aniso, sh, shAniso (voxel_grid.h); the unread ones may
+// be any buffer.
 //
-// vct_diffuse   per traced pixel: E from the diffuse cones at its position and shading normal.
+// vct_diffuse   per traced pixel: E from the diffuse cones at its position and shading normal;
+//               GI_VW adjacent traced pixels per work-item (cone_lanes.h).
 //               GI_DOWN = 1 writes L = ρ/π · E (· voxel AO visibility if asked) per pixel;
 //               GI_DOWN > 1 writes E for the geometry-aware upsampler (filters/discontinuity.cl).
 // vct_specular  per pixel: adds F_Schlick(F0, n·ωo) · L_cone along the mirror direction, the cone's
@@ -12,8 +17,11 @@
 //               mips. Run k − 1 times (re-mipping in between) for k bounces: each run adds one more
 //               order of the light paths (L_k = L_direct + T·L_{k−1}).
 // vct_trace_cones  arbitrary cones (tests, debugging).
+// vct_irradiance_points  the one-cone-at-a-time march (cone.h) of the diffuse set at arbitrary
+//               points (tests: vct_diffuse's lanes against it).
 #include "common/brdf.h"
 #include "gi/vct/cone.h"
+#include "gi/vct/cone_lanes.h"
 
 typedef struct {
   float startOffset;  // voxels along the normal before the first sample
@@ -28,31 +36,67 @@ typedef struct {
 
 inline float3 vct_to_voxels(GiVoxelGrid g, float3 x) { return (x - vload3(0, g.origin)) / g.voxel_size; }
 
-kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, global const float4* iso, global const float4* aniso,
-                        int width, int height, int lowWidth, int lowHeight, global const float4* gPosition,
-                        global const float4* gNormal, global const float4* gAlbedo, global float4* out) {
-  int u = get_global_id(0), v = get_global_id(1);
-  if (u >= lowWidth || v >= lowHeight) return;
-  size_t q = (size_t)min(v * GI_DOWN, height - 1) * width + min(u * GI_DOWN, width - 1);
-  size_t o = (size_t)v * lowWidth + u;
-  float4 pos = gPosition[q];
-  if (pos.w == 0.0f) {
-    out[o] = (float4)(0.0f);
-    return;
-  }
-  float4 e = vct_diffuse_irradiance(iso, aniso, grid.resolution, grid.levels, vct_to_voxels(grid, pos.xyz),
-                                    gNormal[q].xyz, tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda,
-                                    tp.anisotropic, tp.footprintInFront);
-  float3 E = tp.applyAo ? e.xyz * e.w : e.xyz;
-#if GI_DOWN == 1
-  out[o] = (float4)(gAlbedo[q].xyz * GI_INV_PI * E, 0.0f);
-#else
-  out[o] = (float4)(E, 0.0f);
-#endif
+inline VoxelMips vct_mips(GiVoxelGrid g, VctTraceParams tp, global const float4* iso, global const float4* aniso,
+                          global const float4* sh, global const float4* shAniso) {
+  VoxelMips m;
+  m.iso = iso;
+  m.aniso = aniso;
+  m.sh = sh;
+  m.shAniso = shAniso;
+  m.N = g.resolution;
+  m.levels = g.levels;
+  m.anisotropic = tp.anisotropic;
+  return m;
 }
 
-kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, global const float4* iso, global const float4* aniso,
-                         GiView camera, global const float4* gPosition, global const float4* gNormal,
+#define VCT_MIP_ARGS global const float4 *iso, global const float4 *aniso, global const float4 *sh, global const float4 *shAniso
+
+kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int width, int height, int lowWidth,
+                        int lowHeight, global const float4* gPosition, global const float4* gNormal,
+                        global const float4* gAlbedo, global float4* out) {
+  int gx = get_global_id(0), v = get_global_id(1);
+  int u0 = gx * GI_VW;
+  if (u0 >= lowWidth || v >= lowHeight) return;
+  intV u = min(u0 + GI_LANES, lowWidth - 1);
+  intV q = (intV)(min(v * GI_DOWN, height - 1) * width) + min(u * GI_DOWN, width - 1);
+  floatV px, py, pz, pw, nx, ny, nz, nw;
+  GI_GATHER_AOS4(float, (global const float*)gPosition, q, px, py, pz, pw)
+  GI_GATHER_AOS4(float, (global const float*)gNormal, q, nx, ny, nz, nw)
+  intV covered = pw != 0.0f;
+  floatV er = (floatV)(0.0f), eg = er, eb = er;
+  if (GI_ANY(covered)) {
+    float3 origin = vload3(0, grid.origin);
+    float3V p = f3v((px - origin.x) / grid.voxel_size, (py - origin.y) / grid.voxel_size,
+                    (pz - origin.z) / grid.voxel_size);
+    RgbaV e = vct_diffuse_irradiance_lanes(vox_mips_lanes(vct_mips(grid, tp, iso, aniso, sh, shAniso)), p,
+                                           f3v(nx, ny, nz), tp.startOffset, tp.maxDistance, tp.stepFactor,
+                                           tp.aoLambda, tp.footprintInFront);
+    floatV scale = tp.applyAo ? e.a : (floatV)(1.0f);
+#if GI_DOWN == 1
+    floatV ar, ag, ab, aw;
+    GI_GATHER_AOS4(float, (global const float*)gAlbedo, q, ar, ag, ab, aw)
+    scale *= GI_INV_PI;
+    er = ar * e.r * scale;
+    eg = ag * e.g * scale;
+    eb = ab * e.b * scale;
+#else
+    er = e.r * scale;
+    eg = e.g * scale;
+    eb = e.b * scale;
+#endif
+    er = GI_SEL((floatV)(0.0f), er, covered);
+    eg = GI_SEL((floatV)(0.0f), eg, covered);
+    eb = GI_SEL((floatV)(0.0f), eb, covered);
+  }
+  float vals[3][GI_VW];
+  vstoreV(er, 0, vals[0]);
+  vstoreV(eg, 0, vals[1]);
+  vstoreV(eb, 0, vals[2]);
+  for (int l = 0; l < GI_VW && u0 + l < lowWidth; ++l)
+    out[(size_t)v * lowWidth + u0 + l] = (float4)(vals[0][l], vals[1][l], vals[2][l], 0.0f);
+}
+
+kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiView camera, global const float4* gPosition, global const float4* gNormal,
                          global const float4* gSpecular, global float4* out) {
   int x = get_global_id(0), y = get_global_id(1);
   if (x >= camera.width || y >= camera.height) return;
@@ -68,13 +112,14 @@ kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, global const float
   float4 spec = gSpecular[i];
   float3 r = 2.0f * nv * n - wo;
   float tanHalf = ggx_alpha(spec.w);
-  ConeResult c = vct_cone(iso, aniso, grid.resolution, grid.levels, vct_to_voxels(grid, pos.xyz) + n * tp.startOffset,
-                          r, tanHalf, tp.maxDistance, tp.stepFactor, tp.aoLambda, tp.anisotropic, tp.footprintInFront ? tp.startOffset : INFINITY, dot(r, n));
+  ConeResult c = vct_cone(vct_mips(grid, tp, iso, aniso, sh, shAniso), vct_to_voxels(grid, pos.xyz) + n * tp.startOffset,
+                          r, tanHalf, tp.maxDistance, tp.stepFactor, tp.aoLambda,
+                          tp.footprintInFront ? tp.startOffset : INFINITY, dot(r, n));
   out[i].xyz += fresnel_schlick(spec.xyz, nv) * c.radiance.xyz;
 }
 
 kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* acc, global const float4* direct,
-                       global const float4* iso, global const float4* aniso, global float4* level0Out) {
+                       VCT_MIP_ARGS, global float4* level0Out) {
   int N = grid.resolution;
   size_t v = get_global_id(0);
   if (v >= (size_t)N * N * N) return;
@@ -84,22 +129,31 @@ kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* a
     return;
   }
   VoxelSurface s = vox_resolve(grid, acc, v);
-  float4 e = vct_diffuse_irradiance(iso, aniso, N, grid.levels, vct_to_voxels(grid, s.position), s.normal,
-                                    tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda, tp.anisotropic,
+  float4 e = vct_diffuse_irradiance(vct_mips(grid, tp, iso, aniso, sh, shAniso), vct_to_voxels(grid, s.position),
+                                    s.normal, tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda,
                                     tp.footprintInFront);
   level0Out[v] = own + (float4)(s.albedo * GI_INV_PI * e.xyz * s.alpha, 0.0f);
 }
 
 // cones[i] = (origin in voxels, tan of the half-angle), dirs[i] = (unit direction, max distance in
 // voxels); out[i] = (radiance, opacity a), occlusion[i].
-kernel void vct_trace_cones(GiVoxelGrid grid, VctTraceParams tp, global const float4* iso, global const float4* aniso,
-                            global const float4* cones, global const float4* dirs, int count, global float4* out,
+kernel void vct_trace_cones(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, global const float4* cones, global const float4* dirs, int count, global float4* out,
                             global float* occlusion) {
   int i = get_global_id(0);
   if (i >= count) return;
   float4 c = cones[i], d = dirs[i];
-  ConeResult r = vct_cone(iso, aniso, grid.resolution, grid.levels, c.xyz, d.xyz, c.w, d.w, tp.stepFactor,
-                          tp.aoLambda, tp.anisotropic, INFINITY, 0.0f);
+  ConeResult r = vct_cone(vct_mips(grid, tp, iso, aniso, sh, shAniso), c.xyz, d.xyz, c.w, d.w, tp.stepFactor,
+                          tp.aoLambda, INFINITY, 0.0f);
   out[i] = r.radiance;
   occlusion[i] = r.occlusion;
+}
+
+// points[i]: world position (w unused), normals[i]: unit normal; out[i] = (E, AO visibility).
+kernel void vct_irradiance_points(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, global const float4* points,
+                                  global const float4* normals, int count, global float4* out) {
+  int i = get_global_id(0);
+  if (i >= count) return;
+  out[i] = vct_diffuse_irradiance(vct_mips(grid, tp, iso, aniso, sh, shAniso), vct_to_voxels(grid, points[i].xyz),
+                                  normals[i].xyz, tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda,
+                                  tp.footprintInFront);
 }

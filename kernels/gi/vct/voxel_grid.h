@@ -5,9 +5,11 @@
 //   `aniso`: levels 1 … levels−1, each as 6 directional volumes (+x, −x, +y, −y, +z, −z), where
 //            volume "+x" is what a cone travelling along +x sees: the children composited front
 //            to back in increasing x. Level 0 is shared with `iso` (a voxel is isotropic).
+//   SH voxels (vct.voxels=sh): the same two layouts with 3 float4 per voxel (VoxelMips below).
 // Voxels outside the grid are empty (zero).
 #pragma once
 #include "common/math.h"
+#include "common/sh.h"
 #include "gi/vct/voxel_types.h"
 
 inline size_t vox_level_offset(int N, int level) {
@@ -25,56 +27,100 @@ inline size_t vox_aniso_offset(int N, int level, int dir) {
   return 6 * (vox_level_offset(N, level) - (size_t)N * N * N) + (size_t)dir * n * n * n;
 }
 
-// Trilinear lookup of one volume of n³ voxels at p, given in level-0 voxel units from the grid
-// corner; `scale` = 1 / 2^level.
-inline float4 vox_trilinear(global const float4* vol, int n, float3 p, float scale) {
+// The mip chains a cone reads, gathered into one value for the march (built by the kernels).
+//   sh, shAniso: SH voxels (GI_VCT_SH = 1, voxel_types.h), 3 float4 (R, G, B coefficients) per
+//   voxel, in the layout of iso / aniso (voxel i at [3i, 3i + 2]); opacity stays in iso / aniso.
+typedef struct {
+  global const float4* iso;
+  global const float4* aniso;    // unread unless anisotropic
+  global const float4* sh;       // unread unless GI_VCT_SH
+  global const float4* shAniso;  // unread unless GI_VCT_SH and anisotropic
+  int N, levels, anisotropic;
+} VoxelMips;
+
+#ifndef GI_VCT_SH
+#define GI_VCT_SH 0
+#endif
+
+// The 8 voxels and weights of a trilinear lookup in a volume of n³ voxels at p, given in level-0
+// voxel units from the grid corner; `scale` = 1 / 2^level. Voxels outside the volume get weight 0
+// (and index 0).
+inline void vox_trilinear_taps(int n, float3 p, float scale, size_t idx[8], float w[8]) {
   float3 u = p * scale - 0.5f;
   float3 fl = floor(u);
   float3 f = u - fl;
   int3 i0 = convert_int3(fl);
+  for (int k = 0; k < 8; ++k) {
+    int x = i0.x + (k & 1), y = i0.y + ((k >> 1) & 1), z = i0.z + (k >> 2);
+    bool inside = x >= 0 && x < n && y >= 0 && y < n && z >= 0 && z < n;
+    w[k] = inside ? ((k & 1) ? f.x : 1.0f - f.x) * (((k >> 1) & 1) ? f.y : 1.0f - f.y) * ((k >> 2) ? f.z : 1.0f - f.z)
+                  : 0.0f;
+    idx[k] = inside ? ((size_t)z * n + y) * n + x : 0;
+  }
+}
+
+// Trilinear lookup of one volume.
+inline float4 vox_trilinear(global const float4* vol, int n, float3 p, float scale) {
+  size_t idx[8];
+  float w[8];
+  vox_trilinear_taps(n, p, scale, idx, w);
   float4 acc = (float4)(0.0f);
-  for (int dz = 0; dz < 2; ++dz) {
-    int z = i0.z + dz;
-    if (z < 0 || z >= n) continue;
-    float wz = dz ? f.z : 1.0f - f.z;
-    for (int dy = 0; dy < 2; ++dy) {
-      int y = i0.y + dy;
-      if (y < 0 || y >= n) continue;
-      float wy = wz * (dy ? f.y : 1.0f - f.y);
-      for (int dx = 0; dx < 2; ++dx) {
-        int x = i0.x + dx;
-        if (x < 0 || x >= n) continue;
-        float w = wy * (dx ? f.x : 1.0f - f.x);
-        acc += w * vol[((size_t)z * n + y) * n + x];
-      }
-    }
+  for (int k = 0; k < 8; ++k) acc += w[k] * vol[idx[k]];
+  return acc;
+}
+
+// Trilinear lookup of an SH volume evaluated against basis Y, with the opacity of the matching
+// radiance volume: (premultiplied radiance rgb, α). Evaluation is linear, so evaluating the taps
+// and filtering the results equals filtering the coefficients and evaluating.
+inline float4 vox_trilinear_sh(global const float4* alphaVol, global const float4* shVol, int n, float3 p, float scale,
+                               float4 Y) {
+  size_t idx[8];
+  float w[8];
+  vox_trilinear_taps(n, p, scale, idx, w);
+  float4 acc = (float4)(0.0f);
+  for (int k = 0; k < 8; ++k) {
+    global const float4* c = shVol + 3 * idx[k];
+    acc += w[k] * (float4)(dot(c[0], Y), dot(c[1], Y), dot(c[2], Y), alphaVol[idx[k]].w);
   }
   return acc;
 }
 
-// One level of the chain seen along unit direction d: the isotropic volume, or (anisotropic,
-// level ≥ 1) the three directional volumes facing d weighted by d² per axis.
-inline float4 vox_level_sample(global const float4* iso, global const float4* aniso, int N, int level, float3 p,
-                               float3 d, int anisotropic) {
-  int n = N >> level;
+// One volume of level `level` (dir = anisotropic direction, ignored for the isotropic chain) seen
+// along unit d: (premultiplied radiance rgb, α).
+inline float4 vox_volume_sample(VoxelMips m, int level, int dir, float3 p, float3 d) {
+  int n = m.N >> level;
   float scale = 1.0f / (float)(1 << level);
-  if (!anisotropic || level == 0) return vox_trilinear(iso + vox_level_offset(N, level), n, p, scale);
-  float3 w = d * d;
-  float4 cx = vox_trilinear(aniso + vox_aniso_offset(N, level, d.x >= 0.0f ? 0 : 1), n, p, scale);
-  float4 cy = vox_trilinear(aniso + vox_aniso_offset(N, level, d.y >= 0.0f ? 2 : 3), n, p, scale);
-  float4 cz = vox_trilinear(aniso + vox_aniso_offset(N, level, d.z >= 0.0f ? 4 : 5), n, p, scale);
-  return w.x * cx + w.y * cy + w.z * cz;
+  bool iso = !m.anisotropic || level == 0;
+  size_t off = iso ? vox_level_offset(m.N, level) : vox_aniso_offset(m.N, level, dir);
+#if GI_VCT_SH
+  // The light arriving at the cone's apex travels along −d.
+  return vox_trilinear_sh((iso ? m.iso : m.aniso) + off, (iso ? m.sh : m.shAniso) + 3 * off, n, p, scale, sh_basis(-d));
+#else
+  return vox_trilinear((iso ? m.iso : m.aniso) + off, n, p, scale);
+#endif
 }
 
-// Quadrilinear lookup at fractional level (clamped to the chain).
-inline float4 vox_sample(global const float4* iso, global const float4* aniso, int N, int levels, float3 p, float3 d,
-                         float level, int anisotropic) {
-  level = clamp(level, 0.0f, (float)(levels - 1));
+// One level of the chain seen along unit direction d: the isotropic volume, or (anisotropic,
+// level ≥ 1) the three directional volumes facing d weighted by d² per axis.
+inline float4 vox_level_sample(VoxelMips m, int level, float3 p, float3 d) {
+  if (!m.anisotropic || level == 0) return vox_volume_sample(m, level, 0, p, d);
+  float3 w = d * d;
+  return w.x * vox_volume_sample(m, level, d.x >= 0.0f ? 0 : 1, p, d) +
+         w.y * vox_volume_sample(m, level, d.y >= 0.0f ? 2 : 3, p, d) +
+         w.z * vox_volume_sample(m, level, d.z >= 0.0f ? 4 : 5, p, d);
+}
+
+// Quadrilinear lookup at fractional level (clamped to the chain). SH voxels: the l <= 1
+// reconstruction can dip below 0 behind a surface; radiance is clamped at 0.
+inline float4 vox_sample(VoxelMips m, float3 p, float3 d, float level) {
+  level = clamp(level, 0.0f, (float)(m.levels - 1));
   int l0 = (int)floor(level);
   float f = level - (float)l0;
-  float4 c = vox_level_sample(iso, aniso, N, l0, p, d, anisotropic);
-  if (f > 0.0f && l0 + 1 < levels)
-    c = mix(c, vox_level_sample(iso, aniso, N, l0 + 1, p, d, anisotropic), f);
+  float4 c = vox_level_sample(m, l0, p, d);
+  if (f > 0.0f && l0 + 1 < m.levels) c = mix(c, vox_level_sample(m, l0 + 1, p, d), f);
+#if GI_VCT_SH
+  c.xyz = fmax(c.xyz, 0.0f);
+#endif
   return c;
 }
 

@@ -11,6 +11,12 @@
 // vct_mip_isotropic: parent = mean of its 8 children (premultiplied, so this conserves Σ L·α).
 // vct_mip_anisotropic: per parent and direction, the 2 children along the axis composited front
 //   to back (c = c_f + (1 − α_f)·c_b, α = α_f + (1 − α_f)·α_b), the 4 columns averaged.
+// SH voxels (vct.voxels=sh, voxel_types.h), after the radiance mips:
+// vct_sh_project: level 0, per voxel and channel the SH coefficients L·α·lobe(n) of its radiance
+//   (level 0 of the radiance chain), n its mean normal (both lobes when the normals cancel).
+// vct_mip_sh_isotropic / vct_mip_sh_anisotropic: the same two filters on the coefficients (linear
+//   in them, so the parent's coefficients are those of the filtered directional radiance), the
+//   anisotropic compositing weighted by the opacity of the front child from the radiance mips.
 #include "common/lights.h"
 #include "common/shadow.h"
 #include "gi/vct/voxel_grid.h"
@@ -59,6 +65,19 @@ kernel void vct_mip_isotropic(int N, int level, global float4* iso) {
   iso[vox_level_offset(N, level) + v] = sum * 0.125f;
 }
 
+// Column (i, j) of a parent's 2×2×2 children seen along direction dir (0..5 = +x, −x, +y, −y, +z,
+// −z): the front and back child's index in the child volume of edge nc; b = 2 × the parent's cell.
+inline void vox_column(int dir, int i, int j, int3 b, int nc, size_t* front, size_t* back) {
+  int axis = dir / 2;
+  int f = (dir & 1) == 0 ? 0 : 1;  // travelling along +axis: the lower child is in front
+  int3 c0, c1;
+  if (axis == 0) { c0 = (int3)(f, i, j); c1 = (int3)(1 - f, i, j); }
+  else if (axis == 1) { c0 = (int3)(i, f, j); c1 = (int3)(i, 1 - f, j); }
+  else { c0 = (int3)(i, j, f); c1 = (int3)(i, j, 1 - f); }
+  *front = ((size_t)(b.z + c0.z) * nc + (b.y + c0.y)) * nc + (b.x + c0.x);
+  *back = ((size_t)(b.z + c1.z) * nc + (b.y + c1.y)) * nc + (b.x + c1.x);
+}
+
 // Parent voxels of `level` (≥ 1), all 6 directions, from level − 1 (isotropic level 0 or the
 // matching directional volume).
 kernel void vct_mip_anisotropic(int N, int level, global const float4* iso, global float4* aniso) {
@@ -71,20 +90,77 @@ kernel void vct_mip_anisotropic(int N, int level, global const float4* iso, glob
   int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
   global const float4* child =
       level == 1 ? iso : (global const float4*)aniso + vox_aniso_offset(N, level - 1, dir);
-  int axis = dir / 2;
-  bool positive = (dir & 1) == 0;  // travelling along +axis: the lower child is in front
   float4 sum = (float4)(0.0f);
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
-      int3 c0, c1;  // front and back child of this column
-      int f = positive ? 0 : 1;
-      if (axis == 0) { c0 = (int3)(f, i, j); c1 = (int3)(1 - f, i, j); }
-      else if (axis == 1) { c0 = (int3)(i, f, j); c1 = (int3)(i, 1 - f, j); }
-      else { c0 = (int3)(i, j, f); c1 = (int3)(i, j, 1 - f); }
-      int3 b = (int3)(2 * x, 2 * y, 2 * z);
-      float4 front = child[((size_t)(b.z + c0.z) * nc + (b.y + c0.y)) * nc + (b.x + c0.x)];
-      float4 back = child[((size_t)(b.z + c1.z) * nc + (b.y + c1.y)) * nc + (b.x + c1.x)];
-      sum += front + (1.0f - front.w) * back;
+      size_t f, b;
+      vox_column(dir, i, j, (int3)(2 * x, 2 * y, 2 * z), nc, &f, &b);
+      float4 front = child[f];
+      sum += front + (1.0f - front.w) * child[b];
     }
   aniso[vox_aniso_offset(N, level, dir) + v] = sum * 0.25f;
+}
+
+// lobe = (k0, k1) of voxel_types.h.
+kernel void vct_sh_project(GiVoxelGrid grid, global const uint* acc, global const float4* level0, float2 lobe,
+                           global float4* sh) {
+  int N = grid.resolution;
+  size_t plane = (size_t)N * N * N;
+  size_t v = get_global_id(0);
+  if (v >= plane) return;
+  float4 k = (float4)(0.0f);
+  if (acc[GI_VOX_OPACITY * plane + v] != 0u) {
+    VoxelSurface vs = vox_resolve(grid, acc, v);
+    k = vs.twoSided ? (float4)(2.0f * lobe.x, 0.0f, 0.0f, 0.0f)
+                    : (float4)(lobe.x, lobe.y * vs.normal.y, lobe.y * vs.normal.z, lobe.y * vs.normal.x);
+  }
+  float4 L = level0[v];  // premultiplied
+  sh[3 * v + 0] = L.x * k;
+  sh[3 * v + 1] = L.y * k;
+  sh[3 * v + 2] = L.z * k;
+}
+
+// SH coefficients of the parent voxels of `level` (≥ 1): mean of the 8 children.
+kernel void vct_mip_sh_isotropic(int N, int level, global float4* sh) {
+  int n = N >> level, nc = n * 2;
+  size_t v = get_global_id(0);
+  if (v >= (size_t)n * n * n) return;
+  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  global const float4* child = sh + 3 * vox_level_offset(N, level - 1);
+  float4 sum[3] = {(float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
+  for (int dz = 0; dz < 2; ++dz)
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dx = 0; dx < 2; ++dx) {
+        size_t c = ((size_t)(2 * z + dz) * nc + (2 * y + dy)) * nc + (2 * x + dx);
+        for (int ch = 0; ch < 3; ++ch) sum[ch] += child[3 * c + ch];
+      }
+  global float4* out = sh + 3 * (vox_level_offset(N, level) + v);
+  for (int ch = 0; ch < 3; ++ch) out[ch] = sum[ch] * 0.125f;
+}
+
+// SH coefficients of the parent voxels of `level` (≥ 1), all 6 directions: per column the front
+// child's coefficients plus the back child's times (1 − α_front), α from the radiance mips (iso
+// level 0 below level 1, else the matching directional volume), the 4 columns averaged.
+kernel void vct_mip_sh_anisotropic(int N, int level, global const float4* iso, global const float4* aniso,
+                                   global float4* sh, global float4* shAniso) {
+  int n = N >> level, nc = n * 2;
+  size_t cells = (size_t)n * n * n;
+  size_t gid = get_global_id(0);
+  if (gid >= 6 * cells) return;
+  int dir = (int)(gid / cells);
+  size_t v = gid % cells;
+  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  size_t childOffset = level == 1 ? 0 : vox_aniso_offset(N, level - 1, dir);
+  global const float4* alpha = (level == 1 ? iso : aniso) + childOffset;
+  global const float4* child = (level == 1 ? (global const float4*)sh : (global const float4*)shAniso) + 3 * childOffset;
+  float4 sum[3] = {(float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      size_t f, b;
+      vox_column(dir, i, j, (int3)(2 * x, 2 * y, 2 * z), nc, &f, &b);
+      float transmit = 1.0f - alpha[f].w;
+      for (int ch = 0; ch < 3; ++ch) sum[ch] += child[3 * f + ch] + transmit * child[3 * b + ch];
+    }
+  global float4* out = shAniso + 3 * (vox_aniso_offset(N, level, dir) + v);
+  for (int ch = 0; ch < 3; ++ch) out[ch] = sum[ch] * 0.25f;
 }

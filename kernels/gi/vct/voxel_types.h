@@ -41,6 +41,23 @@ typedef struct {
 #define GI_VOX_EMISSION_UNIT 256.0f
 #define GI_VOX_EMISSION_MAX 65535.0f
 
+// SH voxels (vct.voxels=sh; seed 003 §3.4.5): per voxel and colour channel the l <= 1 SH
+// coefficients (common/sh.h's basis) of its premultiplied exitant radiance L·α as a function of
+// the direction of travel ω, stored as 3 float4 (R, G, B) per voxel. A voxel whose surface has
+// normal n and radiance L holds L·α·(k0, k1·n_y, k1·n_z, k1·n_x) with the lobe:
+//   hemisphere: L on the front hemisphere (n·ω > 0), 0 behind: k0 = 2π·Y00 = √π, k1 = π·Y1 = √(3π)/2.
+//               Our voxels are opaque from every side (thickened surfaces), so what a cone sees of
+//               the voxel is the surface's radiance L where its front faces the cone, else nothing.
+//               Irradiance from it is exact in l <= 1: the clamped cosine has no odd l >= 3 and the
+//               hemisphere no even l >= 2 coefficients.
+//   cosine:     ten Brug's (seed 003 appendix B.1) clamped cosine lobe max(0, n·ω): k0 = √π/2,
+//               k1 = √(π/3) (the radiant intensity of a thin surface per unit cross-section).
+// Voxels lit from both sides (normals cancel) hold both lobes: (2·k0, 0, 0, 0).
+#define GI_VCT_SH_HEMISPHERE0 1.772453851f  // √π
+#define GI_VCT_SH_HEMISPHERE1 1.534990062f  // √(3π) / 2
+#define GI_VCT_SH_COSINE0 0.886226925f      // √π / 2 (= GI_SH_LOBE0)
+#define GI_VCT_SH_COSINE1 1.023326708f      // √(π/3) (= GI_SH_LOBE1)
+
 #ifndef __OPENCL_VERSION__
 }  // namespace gi
 static_assert(sizeof(gi::GiVoxelGrid) == 32, "GiVoxelGrid layout");

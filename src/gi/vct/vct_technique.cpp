@@ -1,12 +1,13 @@
 // `vct`: voxel cone tracing (Crassin et al. 2011 as in seed 003 §3.4; ALGORITHMS.md §5).
 // A frame: voxelize (every frame, or once with vct.static=1) -> inject direct light from the
 // shadow maps -> isotropic or anisotropic mips -> [bounces 2..k: cone-trace every voxel, inject,
-// re-mip] -> diffuse cones per pixel (optionally at reduced resolution + geometry-aware upsampling)
+// re-mip] (-> SH voxels: project level 0 onto SH, mip the coefficients) -> diffuse cones per pixel (optionally at reduced resolution + geometry-aware upsampling)
 // -> one specular cone per pixel. docs/techniques/vct.md.
 #include "gi/vct/vct_technique.h"
 
 #include <memory>
 
+#include "cl/gather_width.h"
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/vct/voxel_scene.h"
 
@@ -36,14 +37,20 @@ public:
     bool anisotropic = p.getChoice("vct.mips") == "anisotropic";
     int cones = std::stoi(p.getChoice("vct.cones"));
     int down = p.getInt("vct.downsample");
-    if (cones != cones_ || down != down_) {
+    bool sh = p.getChoice("vct.voxels") == "sh";
+    ShLobe lobe = p.getChoice("vct.sh_lobe") == "cosine" ? ShLobe::Cosine : ShLobe::Hemisphere;
+    if (cones != cones_ || down != down_ || sh != sh_) {
       program_ = f.ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
-                                    {{"GI_VCT_CONES", std::to_string(cones)}, {"GI_DOWN", std::to_string(down)}});
+                                    cl::withGatherWidth(f.ctx, {{"GI_VCT_CONES", std::to_string(cones)},
+                                                                {"GI_DOWN", std::to_string(down)},
+                                                                {"GI_VCT_SH", sh ? "1" : "0"}}));
+      lanes_ = cl::gatherVectorWidth(f.ctx);
       diffuse_ = program_.kernel("vct_diffuse");
       specular_ = program_.kernel("vct_specular");
       bounce_ = program_.kernel("vct_bounce");
       cones_ = cones;
       down_ = down;
+      sh_ = sh;
     }
     const GiVoxelGrid& grid = voxels_->grid();
     float s = grid.voxel_size;
@@ -61,8 +68,15 @@ public:
       voxelized_ = true;
     }
     voxels_->inject(f.deviceScene, f.shadowMaps);
-    voxels_->buildMips(anisotropic);
-    const cl::Buffer& aniso = anisotropic ? voxels_->aniso() : voxels_->iso();  // unread when isotropic
+    auto buildMips = [&] {
+      voxels_->buildMips(anisotropic);
+      if (sh) voxels_->buildShVoxels(anisotropic, lobe);
+    };
+    buildMips();
+    // Chains the cone kernels do not read are passed as the isotropic one (any buffer will do).
+    const cl::Buffer& aniso = anisotropic ? voxels_->aniso() : voxels_->iso();
+    const cl::Buffer& shIso = sh ? voxels_->sh() : voxels_->iso();
+    const cl::Buffer& shAniso = sh && anisotropic ? voxels_->shAniso() : shIso;
     int bounces = p.getInt("vct.bounces");
     if (bounces > 1) {
       size_t n = voxels_->voxelCount();
@@ -74,10 +88,10 @@ public:
       VctTraceParams bp = tp;
       bp.applyAo = 0;
       for (int b = 2; b <= bounces; ++b) {
-        bounce_.args(grid, bp, voxels_->accumulators(), direct_, voxels_->iso(), aniso, bounced_);
+        bounce_.args(grid, bp, voxels_->accumulators(), direct_, voxels_->iso(), aniso, shIso, shAniso, bounced_);
         f.ctx.launch(bounce_, cl::NDRange::d1(cl::roundUp(n, 64), 64), "vct: bounce");
         f.ctx.copy(bounced_, voxels_->iso(), n * 16);
-        voxels_->buildMips(anisotropic);
+        buildMips();
       }
     }
 
@@ -89,8 +103,9 @@ public:
         low_ = cl::Buffer(f.ctx, size_t(lw) * lh * 16, CL_MEM_READ_WRITE, "vct low-res irradiance");
       target = &low_;
     }
-    diffuse_.args(grid, tp, voxels_->iso(), aniso, g.width, g.height, lw, lh, g.position, g.normal, g.albedo, *target);
-    f.ctx.launch(diffuse_, cl::NDRange::d2(cl::roundUp(lw, 8), cl::roundUp(lh, 8), 8, 8), "vct: diffuse cones");
+    diffuse_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, g.width, g.height, lw, lh, g.position, g.normal, g.albedo, *target);
+    int itemsX = (lw + lanes_ - 1) / lanes_;  // GI_VW pixels per work-item
+    f.ctx.launch(diffuse_, cl::NDRange::d2(cl::roundUp(itemsX, 8), cl::roundUp(lh, 8), 8, 8), "vct: diffuse cones");
     if (down > 1) {
       GeometryTest t;
       t.tauZ = p.getFloat("vct.tau_z");
@@ -98,7 +113,7 @@ public:
       upsampler_->run(g, low_, down, t, indirect);
     }
     if (p.getBool("vct.specular")) {
-      specular_.args(grid, tp, voxels_->iso(), aniso, g.view, g.position, g.normal, g.specular, indirect);
+      specular_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, g.view, g.position, g.normal, g.specular, indirect);
       f.ctx.launch(specular_, cl::NDRange::d2(cl::roundUp(g.width, 8), cl::roundUp(g.height, 8), 8, 8),
                    "vct: specular cone");
     }
@@ -110,8 +125,8 @@ private:
   cl::Program program_;
   cl::Kernel diffuse_, specular_, bounce_;
   cl::Buffer low_, bounced_, direct_;
-  int cones_ = 0, down_ = 0;
-  bool voxelized_ = false;
+  int cones_ = 0, down_ = 0, lanes_ = 1;
+  bool sh_ = false, voxelized_ = false;
 };
 
 }  // namespace
@@ -122,6 +137,12 @@ TechniqueInfo vctTechniqueInfo() {
             p.addInt("vct.resolution", 128, 32, 256, "voxel grid resolution N (N³ cubic voxels over the scene; power of two)");
             p.addChoice("vct.mips", "anisotropic", {"isotropic", "anisotropic"},
                         "mip filtering: isotropic (mean of 8 children) or anisotropic (6 directional volumes)");
+            p.addChoice("vct.voxels", "isotropic", {"isotropic", "sh"},
+                        "voxel radiance: isotropic (one colour per voxel) or l <= 1 spherical harmonics per colour "
+                        "channel (seed 003 §3.4.5), evaluated against each cone's direction");
+            p.addChoice("vct.sh_lobe", "hemisphere", {"hemisphere", "cosine"},
+                        "SH voxels: a voxel shows its surface's radiance on its front hemisphere, or (ten Brug) a "
+                        "clamped cosine lobe around its normal");
             p.addChoice("vct.cones", "6", {"6", "9"}, "diffuse cone set: 6 cones (ALGORITHMS §5) or ten Brug's 9 cones; 60° apertures");
             p.addFloat("vct.start_offset", 1.0, 0.0, 16.0, "cone origin offset along the normal, in voxels");
             p.addFloat("vct.step_factor", 0.5, 0.05, 4.0, "march step as a fraction of the cone diameter (at least ½ voxel)");

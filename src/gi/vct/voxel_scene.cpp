@@ -34,9 +34,17 @@ GiVoxelGrid fitVoxelGrid(const Bounds& bounds, int resolution) {
   return g;
 }
 
-uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic) {
+uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic, bool sh) {
   uint64_t n = uint64_t(resolution) * resolution * resolution, bytes = n * GI_VOX_PLANES * 4;
-  for (int l = 0; (resolution >> l) > 0; ++l) bytes += (n >> (3 * l)) * 16 * (anisotropic && l > 0 ? 7 : 1);
+  // Per voxel of a chain: 16 B of radiance and opacity, plus 48 B of SH coefficients.
+  uint64_t perVoxel = sh ? 64 : 16;
+  for (int l = 0; (resolution >> l) > 0; ++l) bytes += (n >> (3 * l)) * perVoxel * (anisotropic && l > 0 ? 7 : 1);
+  return bytes;
+}
+
+uint64_t VoxelScene::anisoBytes() const {
+  uint64_t bytes = 0;
+  for (int l = 1; l < grid_.levels; ++l) bytes += 6 * (voxelCount() >> (3 * l)) * 16;
   return bytes;
 }
 
@@ -49,6 +57,9 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   inject_ = lightProgram_.kernel("vct_inject");
   mipIso_ = lightProgram_.kernel("vct_mip_isotropic");
   mipAniso_ = lightProgram_.kernel("vct_mip_anisotropic");
+  shProject_ = lightProgram_.kernel("vct_sh_project");
+  shMipIso_ = lightProgram_.kernel("vct_mip_sh_isotropic");
+  shMipAniso_ = lightProgram_.kernel("vct_mip_sh_anisotropic");
   instanceEmits_ = ctx.upload(instanceEmissionFlags(scene), "vct instance emission flags");
   uint64_t n = voxelCount();
   uint64_t chain = 0;
@@ -79,10 +90,8 @@ void VoxelScene::inject(const DeviceScene& scene, const ShadowMapSet& shadows) {
 void VoxelScene::buildMips(bool anisotropic) {
   int N = grid_.resolution;
   if (anisotropic && !aniso_) {
-    uint64_t bytes = 0;
-    for (int l = 1; l < grid_.levels; ++l) bytes += 6 * (voxelCount() >> (3 * l)) * 16;
-    ctx_.requireAllocation(bytes, "vct anisotropic mips (vct.resolution)");
-    aniso_ = cl::Buffer(ctx_, bytes, CL_MEM_READ_WRITE, "vct anisotropic mips");
+    ctx_.requireAllocation(anisoBytes(), "vct anisotropic mips (vct.resolution)");
+    aniso_ = cl::Buffer(ctx_, anisoBytes(), CL_MEM_READ_WRITE, "vct anisotropic mips");
   }
   for (int l = 1; l < grid_.levels; ++l) {
     size_t cells = voxelCount() >> (3 * l);
@@ -92,6 +101,42 @@ void VoxelScene::buildMips(bool anisotropic) {
     } else {
       mipIso_.args(N, l, iso_);
       ctx_.launch(mipIso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (isotropic)");
+    }
+  }
+}
+
+void VoxelScene::buildShVoxels(bool anisotropic, ShLobe lobe) {
+  projectSh(lobe);
+  buildShMips(anisotropic);
+}
+
+void VoxelScene::projectSh(ShLobe lobe) {
+  if (!sh_) {
+    uint64_t bytes = 3 * iso_.bytes();
+    ctx_.requireAllocation(bytes, "vct SH voxels (vct.voxels=sh, vct.resolution)");
+    sh_ = cl::Buffer(ctx_, bytes, CL_MEM_READ_WRITE, "vct SH voxels");
+  }
+  cl_float2 k = lobe == ShLobe::Hemisphere ? cl_float2{{GI_VCT_SH_HEMISPHERE0, GI_VCT_SH_HEMISPHERE1}}
+                                           : cl_float2{{GI_VCT_SH_COSINE0, GI_VCT_SH_COSINE1}};
+  uint32_t n = uint32_t(voxelCount());
+  shProject_.args(grid_, acc_, iso_, k, sh_);
+  ctx_.launch(shProject_, cl::NDRange::d1(cl::roundUp(n, 256), 256), "vct: SH project");
+}
+
+void VoxelScene::buildShMips(bool anisotropic) {
+  int N = grid_.resolution;
+  if (anisotropic && !shAniso_) {
+    ctx_.requireAllocation(3 * anisoBytes(), "vct anisotropic SH voxels (vct.voxels=sh, vct.resolution)");
+    shAniso_ = cl::Buffer(ctx_, 3 * anisoBytes(), CL_MEM_READ_WRITE, "vct anisotropic SH voxels");
+  }
+  for (int l = 1; l < grid_.levels; ++l) {
+    size_t cells = voxelCount() >> (3 * l);
+    if (anisotropic) {
+      shMipAniso_.args(N, l, iso_, aniso_, sh_, shAniso_);
+      ctx_.launch(shMipAniso_, cl::NDRange::d1(cl::roundUp(6 * cells, 64), 64), "vct: SH mips (anisotropic)");
+    } else {
+      shMipIso_.args(N, l, sh_);
+      ctx_.launch(shMipIso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: SH mips (isotropic)");
     }
   }
 }

@@ -6,6 +6,7 @@
 //   vs.voxelize(deviceScene);                     // once for static geometry, or every frame
 //   vs.inject(deviceScene, shadowMaps);           // every frame: level 0 radiance
 //   vs.buildMips(anisotropic);                    // levels 1 … log2 N
+//   vs.buildShVoxels(anisotropic, ShLobe::Hemisphere);  // optional SH voxels (after buildMips)
 #pragma once
 #include <cstdint>
 #include <string>
@@ -22,6 +23,10 @@ namespace gi {
 // on every side so that geometry on the bounds lies inside.
 GiVoxelGrid fitVoxelGrid(const Bounds& bounds, int resolution);
 
+// The directional lobe of SH voxels (voxel_types.h): the surface's radiance on its front
+// hemisphere, or ten Brug's clamped cosine.
+enum class ShLobe { Hemisphere, Cosine };
+
 class VoxelScene {
 public:
   VoxelScene(cl::Context& ctx, const Scene& scene, int resolution);
@@ -36,20 +41,30 @@ public:
   void inject(const DeviceScene& scene, const ShadowMapSet& shadows);
   // Levels 1 … log2 N from level 0: isotropic (`iso`) or 6 directional volumes (`aniso`).
   void buildMips(bool anisotropic);
+  // SH voxels (vct.voxels=sh): level 0 from the radiance chain's level 0 and the voxels' normals,
+  // then the same mips on the coefficients. Needs buildMips(anisotropic) first (opacity).
+  void buildShVoxels(bool anisotropic, ShLobe lobe);
+  void projectSh(ShLobe lobe);        // level 0 only
+  void buildShMips(bool anisotropic);  // levels ≥ 1 only
 
   const cl::Buffer& accumulators() const { return acc_; }  // GI_VOX_PLANES planes of N³ (voxel_types.h)
   cl::Buffer& iso() { return iso_; }      // float4 per voxel, all isotropic levels (voxel_grid.h)
   cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (allocated on first use)
-  uint64_t bytes() const { return acc_.bytes() + iso_.bytes() + aniso_.bytes(); }
-  // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes).
-  static uint64_t bytesFor(int resolution, bool anisotropic);
+  cl::Buffer& sh() { return sh_; }            // 3 float4 per voxel of iso (allocated on first use)
+  cl::Buffer& shAniso() { return shAniso_; }  // 3 float4 per voxel of aniso (allocated on first use)
+  uint64_t bytes() const { return acc_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes(); }
+  // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes)
+  // (+ SH coefficients of the chains used).
+  static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false);
 
 private:
   cl::Context& ctx_;
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
-  cl::Kernel clear_, voxelize_, inject_, mipIso_, mipAniso_;
-  cl::Buffer instanceEmits_, acc_, iso_, aniso_;
+  cl::Kernel clear_, voxelize_, inject_, mipIso_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
+  cl::Buffer instanceEmits_, acc_, iso_, aniso_, sh_, shAniso_;
+
+  uint64_t anisoBytes() const;  // the 6 directional volumes of levels ≥ 1, float4 each
 };
 
 }  // namespace gi
