@@ -220,6 +220,18 @@ std::pair<size_t, size_t> columnChildren(int dir, int i, int j, int x, int y, in
           (size_t(b.z + cb.z) * nc + b.y + cb.y) * nc + b.x + cb.x};
 }
 
+// n random cones in a 32³ grid: (origin in voxels, tan of the half-angle 0.02-1.02) and
+// (direction, max distance 8-48 voxels).
+void randomCones(int n, uint32_t seed, std::vector<glm::vec4>& cones, std::vector<glm::vec4>& dirs) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  for (int i = 0; i < n; ++i) {
+    glm::vec3 d = glm::normalize(glm::vec3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f) + glm::vec3(1e-3f));
+    cones.emplace_back(U(rng) * 32, U(rng) * 32, U(rng) * 32, 0.02f + U(rng));
+    dirs.emplace_back(d, 8.0f + 40.0f * U(rng));
+  }
+}
+
 // Host anisotropic chain from level 0 (the compositing rule of voxel_light.cl's comment).
 std::vector<glm::vec4> hostAnisotropic(const std::vector<glm::vec4>& level0, int N, int levels) {
   HostMips h;
@@ -447,6 +459,17 @@ Scene sunlitPlane(glm::vec3 rho, float y, glm::vec3 sunDir, glm::vec3 E) {
   return s;
 }
 
+// A lone sunlit plane (albedo 0.8, sun straight down) seen from 1.5 m above.
+Scene lonePlaneSeenFromAbove() {
+  Scene s = sunlitPlane(glm::vec3(0.8f), 0.0f, glm::vec3(0, -1, 0), glm::vec3(3.0f));
+  Camera cam;
+  cam.position = glm::vec3(0, 1.5f, 0.01f);
+  cam.target = glm::vec3(0, 0, 0);
+  cam.yfov = 0.9f;
+  s.cameras.push_back(cam);
+  return s;
+}
+
 // Sum over a 32×32 frame of vct's indirect radiance with the given parameters.
 double vctIndirectSum(const Scene& s, std::vector<std::string> sets) {
   RenderSettings rs;
@@ -622,14 +645,8 @@ TEST(VctCone, MarchMatchesHostMirror) {
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 9);
   for (auto& v : level0) v *= 0.3f;  // keep cones from saturating in a step or two
   ctx.write(vs.iso(), level0.data(), level0.size() * 16);
-  std::mt19937 rng(4);
-  std::uniform_real_distribution<float> U(0.0f, 1.0f);
   std::vector<glm::vec4> cones, dirs;
-  for (int i = 0; i < 200; ++i) {
-    glm::vec3 d = glm::normalize(glm::vec3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f) + glm::vec3(1e-3f));
-    cones.emplace_back(U(rng) * 32, U(rng) * 32, U(rng) * 32, 0.02f + U(rng));
-    dirs.emplace_back(d, 8.0f + 40.0f * U(rng));
-  }
+  randomCones(200, 4, cones, dirs);
   for (bool an : {false, true}) {
     vs.buildMips(an);
     h.iso = ctx.download<glm::vec4>(vs.iso());
@@ -697,12 +714,7 @@ TEST(VctCone, FootprintInFrontKeepsALitPlaneFromLightingItself) {
   // The cones' coarse samples reach back into the plane's own voxels (self-illumination: the
   // default march gathers part of the plane's radiance); with vct.footprint_in_front the sampled
   // footprint stays in front of the surface and gathers nothing.
-  Scene s = sunlitPlane(glm::vec3(0.8f), 0.0f, glm::vec3(0, -1, 0), glm::vec3(3.0f));
-  Camera cam;
-  cam.position = glm::vec3(0, 1.5f, 0.01f);
-  cam.target = glm::vec3(0, 0, 0);
-  cam.yfov = 0.9f;
-  s.cameras.push_back(cam);
+  Scene s = lonePlaneSeenFromAbove();
   double indirect[2];
   for (int inFront = 0; inFront < 2; ++inFront)
     indirect[inFront] = vctIndirectSum(s, {"vct.resolution=32", "vct.specular=0",
@@ -846,14 +858,8 @@ TEST(VctShVoxels, MarchMatchesHostMirror) {
   ctx.fill(vs.accumulators(), 0u);
   vs.projectSh(ShLobe::Hemisphere);  // allocates; level 0 is then replaced by the random one
   ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
-  std::mt19937 rng(16);
-  std::uniform_real_distribution<float> U(0.0f, 1.0f);
   std::vector<glm::vec4> cones, dirs;
-  for (int i = 0; i < 200; ++i) {
-    glm::vec3 d = glm::normalize(glm::vec3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f) + glm::vec3(1e-3f));
-    cones.emplace_back(U(rng) * 32, U(rng) * 32, U(rng) * 32, 0.02f + U(rng));
-    dirs.emplace_back(d, 8.0f + 40.0f * U(rng));
-  }
+  randomCones(200, 16, cones, dirs);
   for (bool an : {false, true}) {
     vs.buildMips(an);
     vs.buildShMips(an);
@@ -933,12 +939,7 @@ TEST(VctShVoxels, LitPlaneBarelyLightsItself) {
   // SH voxels seen from above their surface at the cones' angles show little (hemisphere lobe:
   // 0.5 − 0.75·cos 60° = 1/8 of L in the side cones, nothing in the cone along n) or nothing
   // (ten Brug's cosine lobe: 0.25 − 0.5·cos 60° = 0).
-  Scene s = sunlitPlane(glm::vec3(0.8f), 0.0f, glm::vec3(0, -1, 0), glm::vec3(3.0f));
-  Camera cam;
-  cam.position = glm::vec3(0, 1.5f, 0.01f);
-  cam.target = glm::vec3(0, 0, 0);
-  cam.yfov = 0.9f;
-  s.cameras.push_back(cam);
+  Scene s = lonePlaneSeenFromAbove();
   std::vector<std::string> common = {"vct.resolution=32", "vct.specular=0", "vct.mips=isotropic"};
   auto with = [&](std::vector<std::string> more) {
     more.insert(more.end(), common.begin(), common.end());

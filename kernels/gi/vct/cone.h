@@ -34,6 +34,15 @@ inline float vct_footprint(float tanHalf, float t, float h0, float cosN) {
   return fmax(1.0f, fmin(2.0f * tanHalf * t, cap));
 }
 
+// One step of the march: t advances by max(½, step_factor·D(t)); returns the step and sets
+// *diameter to the footprint at the new t.
+inline float vct_cone_advance(float tanHalf, float stepFactor, float h0, float cosN, float* t, float* diameter) {
+  float step = fmax(0.5f, stepFactor * vct_footprint(tanHalf, *t, h0, cosN));
+  *t += step;
+  *diameter = vct_footprint(tanHalf, *t, h0, cosN);
+  return step;
+}
+
 inline ConeResult vct_cone(VoxelMips m, float3 o, float3 d, float tanHalf, float maxDistance, float stepFactor,
                            float aoLambda, float h0, float cosN) {
   ConeResult r;
@@ -42,12 +51,10 @@ inline ConeResult vct_cone(VoxelMips m, float3 o, float3 d, float tanHalf, float
   float t = 0.0f;
   float limit = (float)m.N;
   for (;;) {
-    float diameter = vct_footprint(tanHalf, t, h0, cosN);
-    float step = fmax(0.5f, stepFactor * diameter);
-    t += step;
+    float diameter;
+    float step = vct_cone_advance(tanHalf, stepFactor, h0, cosN, &t, &diameter);
     if (t > maxDistance) break;
     float3 p = o + d * t;
-    diameter = vct_footprint(tanHalf, t, h0, cosN);
     float margin = 0.5f * diameter;
     if (any(p < -margin) || any(p > limit + margin)) break;
     // Footprint in front: below h = 2.5 voxels even level 0 would touch the surface's own voxels.

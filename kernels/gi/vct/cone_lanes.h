@@ -139,11 +139,9 @@ inline RgbaV vct_cone_lanes(VoxelMipsV m, float3V o, float3V d, float tanHalf, f
   float t = 0.0f;
   float limit = (float)m.N;
   for (;;) {
-    float diameter = vct_footprint(tanHalf, t, h0, cosN);
-    float step = fmax(0.5f, stepFactor * diameter);
-    t += step;
+    float diameter;
+    float step = vct_cone_advance(tanHalf, stepFactor, h0, cosN, &t, &diameter);
     if (t > maxDistance) break;
-    diameter = vct_footprint(tanHalf, t, h0, cosN);
     float margin = 0.5f * diameter;
     float3V p = addV(o, scaleV(d, (floatV)(t)));
     done = done || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin ||
@@ -153,7 +151,7 @@ inline RgbaV vct_cone_lanes(VoxelMipsV m, float3V o, float3V d, float tanHalf, f
     RgbaV s = vox_sample_lanes(m, p, d, log2(diameter));
     intV live = !done && s.a > 1e-6f;
     floatV alpha = fmin(s.a, 1.0f);
-    floatV corrected = 1.0f - powr(1.0f - alpha, (floatV)(step / diameter));
+    floatV corrected = 1.0f - pow01V(1.0f - alpha, step / diameter);
     floatV k = GI_SEL((floatV)(0.0f), (1.0f - c.a) * (corrected / s.a), live);
     c.r += k * s.r;
     c.g += k * s.g;

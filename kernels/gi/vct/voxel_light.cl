@@ -78,25 +78,32 @@ inline void vox_column(int dir, int i, int j, int3 b, int nc, size_t* front, siz
   *back = ((size_t)(b.z + c1.z) * nc + (b.y + c1.y)) * nc + (b.x + c1.x);
 }
 
+// Work-item gid of a kernel over 6 directions × n³ parent cells: returns the cell's index, sets
+// its direction (≥ 6: past the end) and 2 × its cell coordinates.
+inline size_t vox_directional_item(size_t gid, int n, int* dir, int3* childBase) {
+  size_t cells = (size_t)n * n * n;
+  *dir = (int)(gid / cells);
+  size_t v = gid % cells;
+  *childBase = 2 * (int3)((int)(v % (size_t)n), (int)((v / (size_t)n) % (size_t)n), (int)(v / ((size_t)n * n)));
+  return v;
+}
+
 // Parent voxels of `level` (≥ 1), all 6 directions, from level − 1 (isotropic level 0 or the
 // matching directional volume).
 kernel void vct_mip_anisotropic(int N, int level, global const float4* iso, global float4* aniso) {
-  int n = N >> level, nc = n * 2;
-  size_t cells = (size_t)n * n * n;
-  size_t gid = get_global_id(0);
-  if (gid >= 6 * cells) return;
-  int dir = (int)(gid / cells);
-  size_t v = gid % cells;
-  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  int n = N >> level, nc = n * 2, dir;
+  int3 b;  // 2 × the parent's cell: its first child
+  size_t v = vox_directional_item(get_global_id(0), n, &dir, &b);
+  if (dir >= 6) return;
   global const float4* child =
       level == 1 ? iso : (global const float4*)aniso + vox_aniso_offset(N, level - 1, dir);
   float4 sum = (float4)(0.0f);
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
-      size_t f, b;
-      vox_column(dir, i, j, (int3)(2 * x, 2 * y, 2 * z), nc, &f, &b);
+      size_t f, k;
+      vox_column(dir, i, j, b, nc, &f, &k);
       float4 front = child[f];
-      sum += front + (1.0f - front.w) * child[b];
+      sum += front + (1.0f - front.w) * child[k];
     }
   aniso[vox_aniso_offset(N, level, dir) + v] = sum * 0.25f;
 }
@@ -143,23 +150,20 @@ kernel void vct_mip_sh_isotropic(int N, int level, global float4* sh) {
 // level 0 below level 1, else the matching directional volume), the 4 columns averaged.
 kernel void vct_mip_sh_anisotropic(int N, int level, global const float4* iso, global const float4* aniso,
                                    global float4* sh, global float4* shAniso) {
-  int n = N >> level, nc = n * 2;
-  size_t cells = (size_t)n * n * n;
-  size_t gid = get_global_id(0);
-  if (gid >= 6 * cells) return;
-  int dir = (int)(gid / cells);
-  size_t v = gid % cells;
-  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  int n = N >> level, nc = n * 2, dir;
+  int3 b;  // 2 × the parent's cell: its first child
+  size_t v = vox_directional_item(get_global_id(0), n, &dir, &b);
+  if (dir >= 6) return;
   size_t childOffset = level == 1 ? 0 : vox_aniso_offset(N, level - 1, dir);
   global const float4* alpha = (level == 1 ? iso : aniso) + childOffset;
   global const float4* child = (level == 1 ? (global const float4*)sh : (global const float4*)shAniso) + 3 * childOffset;
   float4 sum[3] = {(float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
-      size_t f, b;
-      vox_column(dir, i, j, (int3)(2 * x, 2 * y, 2 * z), nc, &f, &b);
+      size_t f, k;
+      vox_column(dir, i, j, b, nc, &f, &k);
       float transmit = 1.0f - alpha[f].w;
-      for (int ch = 0; ch < 3; ++ch) sum[ch] += child[3 * f + ch] + transmit * child[3 * b + ch];
+      for (int ch = 0; ch < 3; ++ch) sum[ch] += child[3 * f + ch] + transmit * child[3 * k + ch];
     }
   global float4* out = shAniso + 3 * (vox_aniso_offset(N, level, dir) + v);
   for (int ch = 0; ch < 3; ++ch) out[ch] = sum[ch] * 0.25f;
