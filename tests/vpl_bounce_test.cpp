@@ -3,7 +3,8 @@
 //   - VPLs over a plane: every child lies where the host's walk direction meets the plane
 //     (analytic ray-plane intersection, not the BVH) with flux Φ·ρ·(live/N_g) or Φ·ρ/m when a walk
 //     splits m ways; independently of that mirror, the flux landing within radius R of the foot
-//     point is the cosine emitter's share R²/(R² + h²); parents without flux get no children;
+//     point is the cosine emitter's share R²/(R² + h²); parents without flux get no children; two
+//     lights keep their blocks apart;
 //   - a closed sphere of albedo ρ (furnace-like): every ray lands, each generation carries ρ times
 //     the power of the one before, and the children spread uniformly over the sphere (a cosine
 //     emitter on a sphere lights its inside uniformly);
@@ -155,6 +156,20 @@ TEST(VplBounce, VplsOverAPlaneLandWhereTheHostWalksMeetThePlane) {
     glm::vec3 mean(0.0f);
     for (int k = 0; k < 4; ++k) mean += v[size_t(16 + r + 4 * k)].position - first[size_t(live[r])].position;
     EXPECT_LT(std::hypot(mean.x, mean.z) / 4.0f, 1.5f * h) << "split directions of parent " << live[r] << " bunched";
+  }
+  // Two lights, generation-major and light by light: [light 0: 16][light 1: 16] then the children
+  // [light 0: 16][light 1: 16]. Light 0 has no live parent (its children carry nothing); light 1's
+  // children are the single-light result above.
+  std::vector<Vpl> twoLights(16, Vpl{origin, down, glm::vec3(0.0f), 0.01f});
+  twoLights.insert(twoLights.end(), first.begin(), first.end());
+  VplSet both = seed(ctx, twoLights, 64);
+  both.perLight = 16;
+  gen.bounce(2, b, both);
+  std::vector<Vpl> w = download(ctx, both);
+  for (int j = 0; j < 16; ++j) {
+    EXPECT_EQ(w[size_t(32 + j)].flux, glm::vec3(0.0f)) << "light 0 slot " << j;
+    EXPECT_EQ(w[size_t(48 + j)].position, v[size_t(16 + j)].position) << "light 1 slot " << j;
+    EXPECT_EQ(w[size_t(48 + j)].flux, v[size_t(16 + j)].flux) << "light 1 slot " << j;
   }
   // No live parent: every slot without flux.
   VplSet dead = seed(ctx, std::vector<Vpl>(8, Vpl{origin, down, glm::vec3(0.0f), 0.01f}), 16);
