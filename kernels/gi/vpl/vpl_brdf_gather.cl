@@ -65,6 +65,8 @@ kernel void vpl_brdf_gather(int pixels, GiView camera, global const float4* posi
     er += vf.x * w;
     eg += vf.y * w;
     eb += vf.z * w;
+    floatV ws = w * specOn;
+    if (!GI_ANY(ws > 0.0f)) continue;  // no lane faces this VPL (or sees its lobe): skip the GGX terms
     d2 = fmax(d2, 1e-20f);
     floatV dinv = rsqrt(d2);
     floatV ix = vx * dinv, iy = vy * dinv, iz = vz * dinv;
@@ -80,7 +82,7 @@ kernel void vpl_brdf_gather(int pixels, GiView camera, global const float4* posi
     floatV V = 0.5f / fmax(gv + gl, 1e-12f);
     floatV m = clamp(1.0f - (ix * hx + iy * hy + iz * hz), 0.0f, 1.0f);
     floatV m2 = m * m, m5 = m2 * m2 * m;
-    floatV dvw = D * V * w * specOn;
+    floatV dvw = D * V * ws;
     lr += vf.x * dvw * (f0r + (1.0f - f0r) * m5);
     lg += vf.y * dvw * (f0g + (1.0f - f0g) * m5);
     lb += vf.z * dvw * (f0b + (1.0f - f0b) * m5);
