@@ -8,19 +8,21 @@
 // max(0, +n·ω)), becomes a VPL with negative flux −E⁻·A_pixel·(valid pixels)/M emitting along the
 // E⁻-weighted mean propagation direction: the light the visible surface blocks, removed from the
 // receivers behind it. Final indirect: L = ρ/π · max(0, E_s − E_n).
-// Multi-resolution: the gather runs at half resolution (src side: InterleavedGather on the pixels
-// (2u, 2v)), is upsampled geometry-aware, and every pixel whose shading normal or view depth differs
+// Multi-resolution: the gather runs at half resolution (so_shade_low on the pixels (2u, 2v)), is
+// upsampled geometry-aware, and every pixel whose shading normal or view depth differs
 // from its parent (2⌊x/2⌋, 2⌊y/2⌋) beyond the thresholds is re-shaded at full resolution. The list of
 // those pixels is built here (flags, row counts, one scan, row-wise compaction): never read back.
 //
 //   so_place_indirect   one work-item per indirect light of one light
-//   so_flag             one work-item per pixel: bit 0 = re-shade at full resolution, bit 1 = surface
+//   so_flag             GI_VW pixels of a row per work-item: bit 0 = re-shade at full resolution,
+//                       bit 1 = surface
 //   so_row_counts       one work-item per row: flagged and surface pixels of the row
 //   so_scan_rows        one work-item: row offsets, totals (counters[0] flagged, [1] surface pixels)
 //   so_pick_negative    one work-item: first M surface pixels along the screen Halton sequence
 //                       (counters[2] = how many were found)
 //   so_negative_lights  one work-item per negative light
-//   so_downsample       one work-item per half-resolution pixel: position, shading normal of (2u, 2v)
+//   so_shade_low        GI_VW half-resolution pixels of a row per work-item: E over all lights at
+//                       the full-resolution pixel (2u, 2v), read in place (no copied G-buffer)
 //   so_compact          one work-item per row: list of flagged pixels + their SoA planes
 //   so_refine           GI_VW list entries per work-item: E over all lights, L = ρ/π·max(0, E);
 //                       with GI_VPL_VISIBILITY (vpl.visibility=rays) one shadow ray per pair
@@ -89,16 +91,25 @@ kernel void so_place_indirect(GiView view, global const float4* samples, int cou
 
 kernel void so_flag(int width, int height, global const float* depth, global const float4* normal,
                     global const uint* instance, float tauD, float cosTauN, int everyPixel, global uchar* flags) {
-  int x = get_global_id(0), y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  size_t i = (size_t)y * width + x;
-  size_t q = (size_t)(y & ~1) * width + (x & ~1);
-  bool surface = instance[i] != GI_INVALID_ID;
-  bool parentSurface = instance[q] != GI_INVALID_ID;
-  float z = depth[i];
-  bool differs = !parentSurface || fabs(depth[q] - z) > tauD * z || dot(normal[q].xyz, normal[i].xyz) < cosTauN;
-  bool reshade = surface && (everyPixel != 0 || (q != i && differs));
-  flags[i] = (uchar)((reshade ? SO_FLAG_RESHADE : 0) | (surface ? SO_FLAG_SURFACE : 0));
+  int x0 = get_global_id(0) * GI_VW, y = get_global_id(1);
+  if (x0 >= width || y >= height) return;
+  intV x = min(x0 + GI_LANES, width - 1);       // lanes past the row repeat its last pixel (not stored)
+  intV i = y * width + x, q = (y & ~1) * width + (x & ~1);  // the pixel and its parent
+  floatV z = GI_GATHER(floatV, depth, i), zq = GI_GATHER(floatV, depth, q);
+  uintV id = GI_GATHER(uintV, instance, i), idq = GI_GATHER(uintV, instance, q);
+  floatV nx, ny, nz, nw, qx, qy, qz, qw;
+  GI_GATHER_AOS4(float, (global const float*)normal, i, nx, ny, nz, nw);
+  GI_GATHER_AOS4(float, (global const float*)normal, q, qx, qy, qz, qw);
+  intV surface = id != GI_INVALID_ID;
+  intV differs = (idq == GI_INVALID_ID) | (fabs(zq - z) > tauD * z) | (qx * nx + qy * ny + qz * nz < cosTauN);
+  intV reshade = GI_SEL((intV)(0), differs & (q != i), surface);
+  if (everyPixel) reshade = surface;
+  intV flag = GI_SEL((intV)(0), (intV)(SO_FLAG_RESHADE), reshade) | GI_SEL((intV)(0), (intV)(SO_FLAG_SURFACE), surface);
+  int f[GI_VW];
+  vstoreV(flag, 0, f);
+  global uchar* row = flags + (size_t)y * width + x0;
+  int lanes = min(GI_VW, width - x0);
+  for (int l = 0; l < lanes; ++l) row[l] = (uchar)f[l];
 }
 
 kernel void so_row_counts(int width, int height, global const uchar* flags, global int* rowCounts) {
@@ -182,14 +193,57 @@ kernel void so_negative_lights(GiView camera, global const int* picked, global c
   out[2] = (float4)(len > 0.0f ? -e * (area * weight) : (float3)(0.0f), 0.0f);
 }
 
-kernel void so_downsample(int width, int height, int lowWidth, int lowHeight, global const float4* position,
-                          global const float4* normal, global float4* lowPosition, global float4* lowNormal) {
-  int u = get_global_id(0), v = get_global_id(1);
-  if (u >= lowWidth || v >= lowHeight) return;
-  size_t q = (size_t)min(2 * v, height - 1) * width + min(2 * u, width - 1);
-  size_t o = (size_t)v * lowWidth + u;
-  lowPosition[o] = position[q];
-  lowNormal[o] = normal[q];
+// Σ_p Φ_p·(pair term) over lights 0 … count − 1 for GI_VW receivers (E·π per channel); with
+// GI_VPL_VISIBILITY every pair of an `active` lane with a positive term is tested by a shadow ray.
+#ifdef GI_VPL_VISIBILITY
+#define SO_VISIBILITY_PARAMS , const GiBvh* bvh, float rayEpsilon
+#define SO_VISIBILITY_ARGS , &vpl_bvh, vpl_ray_epsilon
+#else
+#define SO_VISIBILITY_PARAMS
+#define SO_VISIBILITY_ARGS
+#endif
+inline void so_irradiance(floatV px, floatV py, floatV pz, floatV nx, floatV ny, floatV nz, intV active,
+                          global const float4* vpls, int count, floatV* e SO_VISIBILITY_PARAMS) {
+  floatV er = (floatV)(0.0f), eg = (floatV)(0.0f), eb = (floatV)(0.0f);
+  for (int k = 0; k < count; ++k) {
+    float4 a = vpls[3 * k], b = vpls[3 * k + 1], f = vpls[3 * k + 2];
+    floatV gterm = vpl_pair_term(px, py, pz, nx, ny, nz, a, b);
+#ifdef GI_VPL_VISIBILITY
+    gterm = vpl_visible(bvh, rayEpsilon, px, py, pz, a.xyz, GI_SEL((floatV)(0.0f), gterm, active));
+#endif
+    er += f.x * gterm;
+    eg += f.y * gterm;
+    eb += f.z * gterm;
+  }
+  e[0] = er;
+  e[1] = eg;
+  e[2] = eb;
+}
+
+kernel void so_shade_low(int width, int height, int lowWidth, int lowHeight, global const float4* position,
+                         global const float4* normal, global const float4* vpls, int lightCount,
+                         global float4* lowIrradiance GI_VPL_VISIBILITY_PARAMS) {
+  GI_VPL_VISIBILITY_BEGIN
+  int u0 = get_global_id(0) * GI_VW, v = get_global_id(1);
+  if (u0 >= lowWidth || v >= lowHeight) return;
+  intV u = u0 + GI_LANES;
+  intV i = min(2 * v, height - 1) * width + min(2 * min(u, lowWidth - 1), width - 1);
+  floatV px, py, pz, pw, nx, ny, nz, nw;
+  GI_GATHER_AOS4(float, (global const float*)position, i, px, py, pz, pw);
+  GI_GATHER_AOS4(float, (global const float*)normal, i, nx, ny, nz, nw);
+  intV active = (pw > 0.0f) & (u < lowWidth);  // background and lanes past the row: E = 0, no rays
+  floatV zero = (floatV)(0.0f);
+  nx = GI_SEL(zero, nx, active);
+  ny = GI_SEL(zero, ny, active);
+  nz = GI_SEL(zero, nz, active);
+  floatV e[3];
+  so_irradiance(px, py, pz, nx, ny, nz, active, vpls, lightCount, e SO_VISIBILITY_ARGS);
+  floatV er = e[0] * GI_INV_PI, eg = e[1] * GI_INV_PI, eb = e[2] * GI_INV_PI;
+  float t[4 * GI_VW];
+  GI_AOS4_STORE(t, er, eg, eb, zero)
+  global float4* row = lowIrradiance + (size_t)v * lowWidth + u0;
+  int lanes = min(GI_VW, lowWidth - u0);
+  for (int l = 0; l < lanes; ++l) row[l] = vload4(l, t);
 }
 
 kernel void so_compact(int width, int height, global const uchar* flags, global const int* rowOffsets,
@@ -221,27 +275,16 @@ kernel void so_refine(global const int* counters, global const int* list, global
   int count = counters[0];
   int first = (int)(g * GI_VW);
   if (first >= count) return;
-#ifdef GI_VPL_VISIBILITY
-  intV listed = (first + GI_LANES) < count;  // no rays for the stale slots past the list's end
-#endif
   floatV px = vloadV(g, planes), py = vloadV(g, planes + capacity), pz = vloadV(g, planes + 2 * capacity);
   floatV nx = vloadV(g, planes + 3 * capacity), ny = vloadV(g, planes + 4 * capacity);
   floatV nz = vloadV(g, planes + 5 * capacity);
-  floatV er = (floatV)(0.0f), eg = (floatV)(0.0f), eb = (floatV)(0.0f);
-  for (int k = 0; k < lightCount; ++k) {
-    float4 a = vpls[3 * k], b = vpls[3 * k + 1], f = vpls[3 * k + 2];
-    floatV gterm = vpl_pair_term(px, py, pz, nx, ny, nz, a, b);
-#ifdef GI_VPL_VISIBILITY
-    gterm = GI_VPL_VISIBLE(px, py, pz, a.xyz, GI_SEL((floatV)(0.0f), gterm, listed));
-#endif
-    er += f.x * gterm;
-    eg += f.y * gterm;
-    eb += f.z * gterm;
-  }
+  floatV ev[3];
+  intV listed = (first + GI_LANES) < count;  // no rays for the stale slots past the list's end
+  so_irradiance(px, py, pz, nx, ny, nz, listed, vpls, lightCount, ev SO_VISIBILITY_ARGS);
   float e[3][GI_VW];
-  vstoreV(er, 0, e[0]);
-  vstoreV(eg, 0, e[1]);
-  vstoreV(eb, 0, e[2]);
+  vstoreV(ev[0], 0, e[0]);
+  vstoreV(ev[1], 0, e[1]);
+  vstoreV(ev[2], 0, e[2]);
   int lanes = min(GI_VW, count - first);
   for (int l = 0; l < lanes; ++l) {
     int i = list[first + l];

@@ -16,16 +16,19 @@
 //                    cannot light it and are skipped (a visibility-free bound, exact for a plane).
 //                    With `direct` every punctual light is added to every pixel as one more
 //                    source, weight 1 (it is not split among the sets): E⊥ · shadow-map
-//                    visibility · Y_lm(ω_light). Output: 27 planes [channel][coefficient][slot].
-//   sh_igi_prepare   packed coefficients -> camera order, into padded planes together with view
-//                    depth, geometric normal and instance id (the filter's inputs).
-//   sh_igi_filter_shade   box filter of the 27 coefficients over GI_FX × GI_FY accepting
+//                    visibility · Y_lm(ω_light). Output: the 27 coefficient planes [channel][k] of
+//                    the filter's row blocks (SH_PLANES below).
+//   sh_igi_keys      view depth, geometric normal and instance id, camera order -> the same
+//                    packed planes (the filter's discontinuity keys).
+//   sh_igi_filter_shade   in the packed layout, GI_VW slots of one sub-image row per work-item:
+//                    box filter of the 27 coefficients over GI_FX × GI_FY camera pixels accepting
 //                    neighbours by the §3 test (same as kernels/gi/filters/discontinuity.cl),
 //                    renormalised; then per pixel
 //                      L = ρ/π · max(0, Σ Â_l L_lm Y_lm(n_s)) + F0 · max(0, Σ g_l L_lm Y_lm(r))
 //                    Â = (π, 2π/3, π/4), g = (1, (s+1)/(s+2), s/(s+3)), s = 2/α² − 2 ∈ [0, 10⁴],
 //                    α = roughness², r the view vector reflected about n_s. F0 is the Phong
-//                    lobe's specular albedo (no Fresnel angle dependence).
+//                    lobe's specular albedo (no Fresnel angle dependence). Written to camera
+//                    order: only the shaded RGB is re-interleaved, never the 27 coefficients.
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/lights.h"
@@ -50,20 +53,77 @@ inline void sh9_basisV(floatV x, floatV y, floatV z, floatV* b) {
   b[8] = GI_SH_Y22 * (x * x - y * y);
 }
 
+// The filter's planes (host: ShIgiPlanes in src/gi/sh_igi/sh_igi_technique.h), in row blocks: the
+// slots of row sy of sub-image c (InterleavedGather's packed layout) form block c·subHeight + sy of
+// SH_PLANES rows of `pitch` floats, plane k of the row in row k of the block, after a margin of
+// `pad` floats (also after the last block) that holds every slot a window offset can reach from
+// a slot of the image. Planes 0..26: the coefficients [channel][k]; 27: view depth; 28..30:
+// geometric normal; 31: instance id (uint bits). Why blocks rather than 32 whole-image planes: a
+// work-item's 16 window offsets × 27 planes then lie in 16 blocks of a few pages, not 432 pages
+// (one TLB miss per load made the whole-plane filter 2× slower than the camera-order one).
+#define SH_DEPTH SH_C
+#define SH_NORMAL (SH_C + 1)
+#define SH_ID (SH_C + 4)
+#define SH_PLANES 32
+
+// Work-item of the packed-layout passes: GI_VW consecutive slots sx0 … sx0 + GI_VW − 1 of row sy of
+// sub-image c, camera pixel of lane l at (n·(sx0 + l) + cx, y). Ids run over c fastest, then the
+// column block, then sy: the n·m work-items of one block read the same neighbour rows of every
+// sub-image (each coefficient lies in n·m windows), so those lines are reused while in cache —
+// with the column block fastest the filter ran 5–10× slower, streaming from L3.
+typedef struct {
+  int sx0, sy, c, cx, cy, y;
+} ShRow;
+
+inline global float* sh_block(global float* planes, int pad, int pitch, int subHeight, int c, int sy) {
+  return planes + pad + ((size_t)c * subHeight + sy) * SH_PLANES * pitch;
+}
+
+inline bool sh_row(int id, int columns, int width, int height, int n, int m, ShRow* r) {
+  int sets = n * m;
+  int block = id / sets;
+  r->c = id - block * sets;
+  r->sy = block / columns;
+  r->sx0 = (block - r->sy * columns) * GI_VW;
+  r->cy = r->c / n;
+  r->cx = r->c - r->cy * n;
+  r->y = r->sy * m + r->cy;
+  return r->y < height && r->sx0 * n + r->cx < width;
+}
+
 // Band of coefficient k.
 #define SH_BAND(k) ((k) == 0 ? 0 : (k) < 4 ? 1 : 2)
 
-kernel void sh_igi_project(global const float* planes, int sets, int stride, global const float4* vpls, int count,
-                           int direct, global const GiLight* lights, int lightCount,
-                           global const GiView* shadowViews, global const uint* shadowOffsets,
-                           global const float* shadowDepths, global float* coeffs GI_VPL_VISIBILITY_PARAMS) {
+kernel void sh_igi_project(int width, int height, int n, int m, int subWidth, int subHeight, int stride, int pitch,
+                           int pad, global const float* receivers, global const float4* vpls, int count, int direct,
+                           global const GiLight* lights, int lightCount, global const GiView* shadowViews,
+                           global const uint* shadowOffsets, global const float* shadowDepths,
+                           global float* planes GI_VPL_VISIBILITY_PARAMS) {
   GI_VPL_VISIBILITY_BEGIN
-  size_t g = get_global_id(0);
-  size_t L = (size_t)sets * stride;
-  if (g * GI_VW >= L) return;
-  int set = (int)(g * GI_VW / (size_t)stride);
-  floatV px = vloadV(g, planes), py = vloadV(g, planes + L), pz = vloadV(g, planes + 2 * L);
-  floatV nx = vloadV(g, planes + 3 * L), ny = vloadV(g, planes + 4 * L), nz = vloadV(g, planes + 5 * L);
+  ShRow r;
+  int columns = (subWidth + GI_VW - 1) / GI_VW;
+  if (!sh_row(get_global_id(0), columns, width, height, n, m, &r)) return;
+  int sets = n * m, set = r.c;
+  size_t L = (size_t)sets * stride;  // receivers: InterleavedGather's six planes of L slots
+  size_t slot = (size_t)r.c * stride + (size_t)r.sy * subWidth + r.sx0;
+  int lanes = min(GI_VW, subWidth - r.sx0);
+  floatV px, py, pz, nx, ny, nz;
+  if (lanes == GI_VW) {
+    px = vloadV(0, receivers + slot);
+    py = vloadV(0, receivers + L + slot);
+    pz = vloadV(0, receivers + 2 * L + slot);
+    nx = vloadV(0, receivers + 3 * L + slot);
+    ny = vloadV(0, receivers + 4 * L + slot);
+    nz = vloadV(0, receivers + 5 * L + slot);
+  } else {  // the row's last slots: lanes past it repeat its last slot (never stored)
+    intV s = (int)slot + min(GI_LANES, lanes - 1);
+    px = GI_GATHER(floatV, receivers, s);
+    py = GI_GATHER(floatV, receivers + L, s);
+    pz = GI_GATHER(floatV, receivers + 2 * L, s);
+    nx = GI_GATHER(floatV, receivers + 3 * L, s);
+    ny = GI_GATHER(floatV, receivers + 4 * L, s);
+    nz = GI_GATHER(floatV, receivers + 5 * L, s);
+  }
   floatV c[SH_C];
 #pragma unroll
   for (int k = 0; k < SH_C; ++k) c[k] = (floatV)(0.0f);
@@ -118,33 +178,56 @@ kernel void sh_igi_project(global const float* planes, int sets, int stride, glo
       }
     }
   }
+  global float* o = sh_block(planes, pad, pitch, subHeight, r.c, r.sy) + r.sx0;
 #pragma unroll
-  for (int k = 0; k < SH_C; ++k) vstoreV(c[k], g, coeffs + (size_t)k * L);
+  for (int k = 0; k < SH_C; ++k) {
+    if (lanes == GI_VW) {
+      vstoreV(c[k], 0, o + (size_t)k * pitch);
+    } else {
+      float t[GI_VW];
+      vstoreV(c[k], 0, t);
+      for (int l = 0; l < lanes; ++l) o[(size_t)k * pitch + l] = t[l];
+    }
+  }
 }
 
-// Pass 2: one work-item per camera pixel; padded planes of the filter (SH_PAD floats of margin):
-// 27 coefficients, view depth, geometric normal x, y, z, instance id (uint bits).
-#define SH_PAD 64
-#define SH_PLANES 32
-kernel void sh_igi_prepare(int width, int height, int n, int m, int subWidth, int stride,
-                           global const float* coeffs, global const float* depth, global const float4* geoNormal,
-                           global const uint* instance, global float* planes) {
-  int x = get_global_id(0), y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  size_t i = (size_t)y * width + x;
-  size_t P = (size_t)width * height + 2 * SH_PAD;
-  size_t Lp = (size_t)n * m * stride;
-  size_t o = (size_t)((x % n) + n * (y % m)) * stride + (size_t)(y / m) * subWidth + (size_t)(x / n);
-  global float* out = planes + SH_PAD + i;
+// Pass 2: the filter's keys (view depth, geometric normal, instance id) from camera order into the
+// packed planes; lanes without a camera pixel get the invalid id. A row's last vector may hold
+// fewer than GI_VW slots of the row: stored lane by lane, never into the next row's slots.
+kernel void sh_igi_keys(int width, int height, int n, int m, int subWidth, int subHeight, int pitch, int pad,
+                        global const float* depth, global const float4* geoNormal, global const uint* instance,
+                        global float* planes) {
+  ShRow r;
+  int columns = (subWidth + GI_VW - 1) / GI_VW;
+  if (!sh_row(get_global_id(0), columns, width, height, n, m, &r)) return;
+  intV x = (r.sx0 + GI_LANES) * n + r.cx;
+  intV inside = x < width;
+  intV i = r.y * width + min(x, width - 1);
+  floatV z = GI_GATHER(floatV, depth, i), gnx, gny, gnz, gnw;
+  uintV id = GI_SEL((uintV)(GI_INVALID_ID), GI_GATHER(uintV, instance, i), inside);
+  GI_GATHER_AOS4(float, (global const float*)geoNormal, i, gnx, gny, gnz, gnw);
+  floatV zero = (floatV)(0.0f);
+  floatV key[5] = {GI_SEL(zero, z, inside), GI_SEL(zero, gnx, inside), GI_SEL(zero, gny, inside),
+                   GI_SEL(zero, gnz, inside), as_floatV(id)};
+  global float* o = sh_block(planes, pad, pitch, subHeight, r.c, r.sy) + r.sx0;
+  int lanes = min(GI_VW, subWidth - r.sx0);
 #pragma unroll
-  for (int k = 0; k < SH_C; ++k) out[k * P] = coeffs[k * Lp + o];
-  float4 gn = geoNormal[i];
-  out[SH_C * P] = depth[i];
-  out[(SH_C + 1) * P] = gn.x;
-  out[(SH_C + 2) * P] = gn.y;
-  out[(SH_C + 3) * P] = gn.z;
-  ((global uint*)out)[(SH_C + 4) * P] = instance[i];
+  for (int k = 0; k < 5; ++k) {
+    global float* plane = o + (size_t)(SH_DEPTH + k) * pitch;
+    if (lanes == GI_VW) {
+      vstoreV(key[k], 0, plane);
+    } else {
+      float t[GI_VW];
+      vstoreV(key[k], 0, t);
+      for (int l = 0; l < lanes; ++l) plane[l] = t[l];
+    }
+  }
 }
+
+// ⌊t / d⌋ for |t| ≤ 64, 1 ≤ d ≤ 8 without an integer division (one scalar idiv per window offset
+// was a visible share of the filter): (t + ½)/d is at least 1/16 away from an integer and the float
+// error is far below that, so the floor is exact.
+inline int floor_div_small(int t, int d) { return (int)floor(((float)t + 0.5f) * (1.0f / (float)d)); }
 
 #ifndef GI_FX
 #define GI_FX 4
@@ -153,123 +236,141 @@ kernel void sh_igi_prepare(int width, int height, int n, int m, int subWidth, in
 #define GI_FY 4
 #endif
 
-// Pass 3: GI_VW adjacent pixels of a row per work-item, one unaligned vector load per plane and
-// window offset (the margins keep loads in bounds; lanes outside the image are masked), dy outer,
-// dx inner (the host mirror's order). Then the zonal shading.
-kernel void sh_igi_filter_shade(int width, int height, global const float* planes, global const float4* gPosition,
+// Pass 3, in the packed layout (no re-interleave of the 27 coefficients): the window offset
+// (dx, dy) of the pixel in sub-image c = (cx, cy), slot (sx, sy), is the pixel of sub-image
+// ((cx + dx) mod n, (cy + dy) mod m) at slot (sx + ⌊(cx + dx)/n⌋, sy + ⌊(cy + dy)/m⌋): the shift
+// depends on (c, dx, dy) only, never on the lane, so every window offset is one contiguous vector
+// load per plane. Weights (§3 test, dy outer, dx inner: the host mirror's order) first, then the
+// coefficients channel by channel — 9 accumulators live instead of 27 — folded into the zonal
+// shading sums of the centre pixel. Shading inputs are gathered from camera order and the
+// result is written there.
+kernel void sh_igi_filter_shade(int width, int height, int n, int m, int subWidth, int subHeight, int pitch, int pad,
+                                global const float* planes, global const float4* gPosition,
                                 global const float4* gNormal, global const float4* gAlbedo,
                                 global const float4* gSpecular, GiView camera, float tauZ, float cosTauN,
                                 int sameInstance, int glossy, global float4* out) {
-  int gx = get_global_id(0), y = get_global_id(1);
-  int x0 = gx * GI_VW;
-  if (x0 >= width || y >= height) return;
-  size_t P = (size_t)width * height + 2 * SH_PAD;
-  global const float* pz = planes + SH_C * P;
-  global const float* pnx = planes + (SH_C + 1) * P;
-  global const float* pny = planes + (SH_C + 2) * P;
-  global const float* pnz = planes + (SH_C + 3) * P;
-  global const uint* pid = (global const uint*)(planes + (SH_C + 4) * P);
-  size_t c0 = SH_PAD + (size_t)y * width + x0;
-  floatV z = vloadV(0, pz + c0), nx = vloadV(0, pnx + c0), ny = vloadV(0, pny + c0), nz = vloadV(0, pnz + c0);
-  uintV id = vloadV(0, pid + c0);
-  intV xl = x0 + GI_LANES;
+  ShRow r;
+  int columns = (subWidth + GI_VW - 1) / GI_VW;
+  if (!sh_row(get_global_id(0), columns, width, height, n, m, &r)) return;
+  intV x = (r.sx0 + GI_LANES) * n + r.cx;
+  size_t blockSize = (size_t)SH_PLANES * pitch;
+  global const float* base = planes + pad + ((size_t)r.c * subHeight + r.sy) * blockSize + r.sx0;
+  global const float* pz = base + (size_t)SH_DEPTH * pitch;
+  global const float* pnx = base + (size_t)SH_NORMAL * pitch;
+  global const float* pny = pnx + pitch;
+  global const float* pnz = pny + pitch;
+  global const uint* pid = (global const uint*)(base + (size_t)SH_ID * pitch);
+  floatV z = vloadV(0, pz), nx = vloadV(0, pnx), ny = vloadV(0, pny), nz = vloadV(0, pnz);
+  uintV id = vloadV(0, pid);
   floatV tz = tauZ * z;
-  floatV acc[SH_C];
-#pragma unroll
-  for (int k = 0; k < SH_C; ++k) acc[k] = (floatV)(0.0f);
+
+  floatV w[GI_FX * GI_FY];
+  long off[GI_FX * GI_FY];  // window offset q relative to this work-item's first slot, in floats
   floatV ws = (floatV)(0.0f);
 #pragma unroll
   for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
-    int qy = y + dy;
-    if (qy < 0 || qy >= height) continue;
+    int ty = r.cy + dy, shy = floor_div_small(ty, m);
+    int qy = r.y + dy;
 #pragma unroll
     for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
-      size_t q = (size_t)((long)SH_PAD + (long)qy * width + x0 + dx);
-      intV qx = xl + dx;
-      uintV qid = vloadV(0, pid + q);
-      floatV dz = fabs(vloadV(0, pz + q) - z);
-      floatV dn = vloadV(0, pnx + q) * nx + vloadV(0, pny + q) * ny + vloadV(0, pnz + q) * nz;
+      int q = (dy + GI_FY / 2) * GI_FX + dx + GI_FX / 2;
+      int tx = r.cx + dx, shx = floor_div_small(tx, n);
+      int cq = (ty - shy * m) * n + (tx - shx * n);
+      off[q] = ((long)(cq - r.c) * subHeight + shy) * (long)blockSize + shx;
+      w[q] = (floatV)(0.0f);
+      if (qy < 0 || qy >= height) continue;
+      long s = off[q];
+      intV qx = x + dx;
+      uintV qid = vloadV(0, pid + s);
+      floatV dz = fabs(vloadV(0, pz + s) - z);
+      floatV dn = vloadV(0, pnx + s) * nx + vloadV(0, pny + s) * ny + vloadV(0, pnz + s) * nz;
 #if GI_VW == 1
-      float wq = (qx >= 0 && qx < width && qid != GI_INVALID_ID && dz <= tz && dn >= cosTauN &&
-                  (sameInstance == 0 || qid == id)) ? 1.0f : 0.0f;
+      w[q] = (qx >= 0 && qx < width && qid != GI_INVALID_ID && dz <= tz && dn >= cosTauN &&
+              (sameInstance == 0 || qid == id)) ? 1.0f : 0.0f;
 #else
       intV ok = (qx >= 0) & (qx < width) & (qid != GI_INVALID_ID) & (dz <= tz) & (dn >= cosTauN) &
                 ((intV)(sameInstance == 0 ? -1 : 0) | (qid == id));
-      floatV wq = select((floatV)(0.0f), (floatV)(1.0f), ok);
+      w[q] = select((floatV)(0.0f), (floatV)(1.0f), ok);
 #endif
-      ws += wq;
-#pragma unroll
-      for (int k = 0; k < SH_C; ++k) acc[k] += wq * vloadV(0, planes + (size_t)k * P + q);
+      ws += w[q];
     }
   }
   // The centre pixel always passes its own test unless it is background; ws = 0 only there.
   floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
 
-  // Shading inputs, array of structures -> lanes (a partial group repeats its last pixel).
-  size_t i = (size_t)y * width + x0;
-  int valid = min(GI_VW, width - x0);
-  float tmp[4 * GI_VW];
-  float3V x, n, alb, f0;
+  // Shading inputs gathered from camera order (lanes past the image repeat the row's last pixel).
+  intV inside = x < width;
+  intV i = r.y * width + min(x, width - 1);
+  float3V p, nrm, alb, f0;
   floatV pw, unused, roughness;
-#define SH_LOAD_PLANE(plane, X, Y, Z, W)                                           \
-  if (valid == GI_VW) {                                                            \
-    GI_AOS4_LOAD((global const float*)(plane + i), X, Y, Z, W)                     \
-  } else {                                                                         \
-    for (int l = 0; l < GI_VW; ++l) vstore4(plane[i + min(l, valid - 1)], l, tmp); \
-    GI_AOS4_LOAD(tmp, X, Y, Z, W)                                                  \
-  }
-  SH_LOAD_PLANE(gPosition, x.x, x.y, x.z, pw)
-  SH_LOAD_PLANE(gNormal, n.x, n.y, n.z, unused)
-  SH_LOAD_PLANE(gAlbedo, alb.x, alb.y, alb.z, unused)
-  SH_LOAD_PLANE(gSpecular, f0.x, f0.y, f0.z, roughness)
-#undef SH_LOAD_PLANE
-  floatV yn[SH_N];
-  sh9_basisV(n.x, n.y, n.z, yn);
-  floatV er = (floatV)(0.0f), eg = (floatV)(0.0f), eb = (floatV)(0.0f);
+  GI_GATHER_AOS4(float, (global const float*)gPosition, i, p.x, p.y, p.z, pw);
+  GI_GATHER_AOS4(float, (global const float*)gNormal, i, nrm.x, nrm.y, nrm.z, unused);
+  GI_GATHER_AOS4(float, (global const float*)gAlbedo, i, alb.x, alb.y, alb.z, unused);
+  GI_GATHER_AOS4(float, (global const float*)gSpecular, i, f0.x, f0.y, f0.z, roughness);
+  // Zonal weights of each coefficient: Lambert at the shading normal, Phong lobe at r.
+  floatV tn[SH_N], tr[SH_N];
+  sh9_basisV(nrm.x, nrm.y, nrm.z, tn);
   const float lambert[3] = {GI_SH_COSCONV0, GI_SH_COSCONV1, GI_SH_COSCONV2};
 #pragma unroll
-  for (int k = 0; k < SH_N; ++k) {
-    floatV t = lambert[SH_BAND(k)] * yn[k];
-    er += t * acc[k];
-    eg += t * acc[SH_N + k];
-    eb += t * acc[2 * SH_N + k];
-  }
-  float3V Lo = f3v(alb.x * GI_INV_PI * fmax(er * inv, 0.0f), alb.y * GI_INV_PI * fmax(eg * inv, 0.0f),
-                   alb.z * GI_INV_PI * fmax(eb * inv, 0.0f));
+  for (int k = 0; k < SH_N; ++k) tn[k] = lambert[SH_BAND(k)] * tn[k];
   if (glossy) {
     float3V wo;
     if (camera.orthographic) {
-      float3 w = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
-      wo = f3v((floatV)(w.x), (floatV)(w.y), (floatV)(w.z));
+      float3 v = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
+      wo = f3v((floatV)(v.x), (floatV)(v.y), (floatV)(v.z));
     } else {
-      wo = safe_normalizeV(f3v(camera.eye[0] - x.x, camera.eye[1] - x.y, camera.eye[2] - x.z), n);
+      wo = safe_normalizeV(f3v(camera.eye[0] - p.x, camera.eye[1] - p.y, camera.eye[2] - p.z), nrm);
     }
-    floatV nv = dotV(n, wo);
-    float3V r = f3v(2.0f * nv * n.x - wo.x, 2.0f * nv * n.y - wo.y, 2.0f * nv * n.z - wo.z);
+    floatV nv = dotV(nrm, wo);
+    float3V rv = f3v(2.0f * nv * nrm.x - wo.x, 2.0f * nv * nrm.y - wo.y, 2.0f * nv * nrm.z - wo.z);
     floatV alpha = fmax(roughness * roughness, 1e-4f);
     floatV s = clamp(2.0f / (alpha * alpha) - 2.0f, 0.0f, 1e4f);
     floatV g1 = (s + 1.0f) / (s + 2.0f), g2 = s / (s + 3.0f);
-    floatV yr[SH_N];
-    sh9_basisV(r.x, r.y, r.z, yr);
-    floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f);
+    sh9_basisV(rv.x, rv.y, rv.z, tr);
+#pragma unroll
+    for (int k = 1; k < SH_N; ++k) tr[k] *= SH_BAND(k) == 1 ? g1 : g2;
+  } else {
+#pragma unroll
+    for (int k = 0; k < SH_N; ++k) tr[k] = (floatV)(0.0f);
+  }
+
+  // Filter the 9 coefficient planes of each channel over the window (window offset outer: one
+  // weight and 9 accumulators live), then fold them into the shading sums.
+  floatV diffuse[3], specular[3];
+  for (int ch = 0; ch < 3; ++ch) {
+    global const float* channel = base + (size_t)ch * SH_N * pitch;
+    floatV acc[SH_N];
+#pragma unroll
+    for (int k = 0; k < SH_N; ++k) acc[k] = (floatV)(0.0f);
+#pragma unroll
+    for (int q = 0; q < GI_FX * GI_FY; ++q) {
+      floatV wq = w[q];
+      global const float* src = channel + off[q];
+#pragma unroll
+      for (int k = 0; k < SH_N; ++k) acc[k] += wq * vloadV(0, src + (size_t)k * pitch);
+    }
+    floatV e = (floatV)(0.0f), sp = (floatV)(0.0f);
 #pragma unroll
     for (int k = 0; k < SH_N; ++k) {
-      floatV t = (SH_BAND(k) == 0 ? (floatV)(1.0f) : SH_BAND(k) == 1 ? g1 : g2) * yr[k];
-      sr += t * acc[k];
-      sg += t * acc[SH_N + k];
-      sb += t * acc[2 * SH_N + k];
+      e += tn[k] * acc[k];
+      sp += tr[k] * acc[k];
     }
-    Lo.x += f0.x * fmax(sr * inv, 0.0f);
-    Lo.y += f0.y * fmax(sg * inv, 0.0f);
-    Lo.z += f0.z * fmax(sb * inv, 0.0f);
+    diffuse[ch] = e;
+    specular[ch] = sp;
   }
-  intV surface = (id != GI_INVALID_ID) & (pw != 0.0f);
   floatV zero = (floatV)(0.0f);
-  floatV rx = GI_SEL(zero, Lo.x, surface), ry = GI_SEL(zero, Lo.y, surface), rz = GI_SEL(zero, Lo.z, surface);
-  if (valid == GI_VW) {
-    GI_AOS4_STORE((global float*)(out + i), rx, ry, rz, zero)
-  } else {
-    GI_AOS4_STORE(tmp, rx, ry, rz, zero)
-    for (int l = 0; l < valid; ++l) out[i + l] = vload4(l, tmp);
+  intV surface = (id != GI_INVALID_ID) & (pw != 0.0f) & inside;
+  floatV res[3];
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch) {
+    floatV a = ch == 0 ? alb.x : ch == 1 ? alb.y : alb.z, f = ch == 0 ? f0.x : ch == 1 ? f0.y : f0.z;
+    floatV L = a * GI_INV_PI * fmax(diffuse[ch] * inv, 0.0f);
+    if (glossy) L += f * fmax(specular[ch] * inv, 0.0f);
+    res[ch] = GI_SEL(zero, L, surface);
   }
+  float t[4 * GI_VW];
+  GI_AOS4_STORE(t, res[0], res[1], res[2], zero)
+  int lanes = min(GI_VW, (width - 1 - r.cx) / n - r.sx0 + 1);  // lanes with a camera pixel
+  int row = r.y * width + r.sx0 * n + r.cx;
+  for (int l = 0; l < lanes; ++l) out[row + l * n] = vload4(l, t);
 }

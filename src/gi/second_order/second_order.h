@@ -43,17 +43,16 @@ private:
     float cosAccept = 2.0f;
   };
   cl::Program program_;
-  cl::Kernel place_, flag_, rowCounts_, scanRows_, pickNegative_, negative_, downsample_, compact_, refine_;
-  cl::Program visibleProgram_;  // so_refine with visibility rays, built when first asked for
-  cl::Kernel visibleRefine_;
+  cl::Kernel place_, flag_, rowCounts_, scanRows_, pickNegative_, negative_, shadeLow_, compact_, refine_;
+  cl::Program visibleProgram_;  // so_shade_low and so_refine with visibility rays, built when first asked for
+  cl::Kernel visibleShadeLow_, visibleRefine_;
+  void buildVisibilityKernels(cl::Context& ctx);
   VplVisibility visibility_;
-  std::unique_ptr<InterleavedGather> gather_;
   std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   std::unique_ptr<VplGenerator> fluxGenerator_;
   VplSet lights_, fluxLights_;
   std::vector<Samples> samples_;
   cl::Buffer counters_, flags_, rowCountsBuf_, rowOffsets_, list_, planes_, candidates_, picked_, lowIrradiance_;
-  GBuffer low_;  // half-resolution position and shading normal only (what the gather reads)
   int width_ = 0, height_ = 0, lowW_ = 0, lowH_ = 0, candidatesFor_ = -1, candidateCount_ = 0;
   int frame_ = 0;  // seeds the random placement
 };
