@@ -18,7 +18,8 @@
 //                         geometry volume lets through, once per frame (static over the steps).
 //   lpv_propagate         one gather step: each cell collects from its 6 neighbours, 5 faces each.
 //   lpv_lookup_grid       accumulated grid -> the lookup grid (irradiance coefficients, float4 per
-//                         cell and channel).
+//                         cell and channel; copied into a 3D image on devices that filter images
+//                         in hardware, lpv.lookup_storage).
 //   lpv_lookup            per pixel: trilinear in the lookup grid at x + ½ cell along the
 //                         geometric normal; irradiance by the clamped-cosine convolution at −n;
 //                         L = ρ/π · E; cascades blended per seed 003 eq. 3.2.
@@ -445,6 +446,16 @@ kernel void lpv_lookup_grid(global const float* accumulated, constant float4* ca
 #define LPV_LANE0(v) ((v).s0)
 #endif
 
+// The lookup grid is a 3D image (LPV_N × LPV_N × LPV_N·3·cascades, the slabs stacked along z) on
+// devices that filter images in hardware, a float4 buffer otherwise. The sample coordinates are
+// clamped to the slab's border cell centres, so the linear filter never mixes two slabs.
+#if LPV_IMAGES
+#define LPV_LOOKUP_GRID read_only image3d_t
+constant sampler_t lpv_trilinear_sampler = CLK_NORMALIZED_COORDS_FALSE | CLK_ADDRESS_CLAMP_TO_EDGE | CLK_FILTER_LINEAR;
+#else
+#define LPV_LOOKUP_GRID global const float4*
+#endif
+
 // Trilinear interpolation over the 8 corners c[corner·4 + coefficient] (corner bits x, y, z).
 inline void lpv_trilinear(const floatV* c, floatV fx, floatV fy, floatV fz, floatV* q) {
 #pragma unroll
@@ -459,7 +470,7 @@ inline void lpv_trilinear(const floatV* c, floatV fx, floatV fy, floatV fz, floa
 // from cascade k (per lane): trilinear over cell centres at p + ½ cell along ng (clamped at the
 // grid's border cells) in the lookup grid, E = q0 − q·n. When all lanes read the same 8 cells
 // (the common case: cells span many pixels) the corners are loaded once for all lanes.
-inline void cascade_irradiance(global const float4* grid, constant float4* cascades, intV k, float3V p, float3V ng,
+inline void cascade_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, intV k, float3V p, float3V ng,
                                float3V n, floatV* e) {
   floatV ox = 0.0f, oy = 0.0f, oz = 0.0f, s = 1.0f;
 #pragma unroll
@@ -474,6 +485,28 @@ inline void cascade_irradiance(global const float4* grid, constant float4* casca
   floatV ux = clamp((p.x + 0.5f * s * ng.x - ox) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
   floatV uy = clamp((p.y + 0.5f * s * ng.y - oy) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
   floatV uz = clamp((p.z + 0.5f * s * ng.z - oz) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
+#if LPV_IMAGES
+  // The sampler filters lane by lane: texel centres at integer + ½, slab (k·3 + ch) at depth (k·3 + ch)·N.
+  float u[3][GI_VW], q[3][4][GI_VW];
+  int slab[GI_VW];
+  vstoreV(ux, 0, u[0]);
+  vstoreV(uy, 0, u[1]);
+  vstoreV(uz, 0, u[2]);
+  vstoreV(k * 3, 0, slab);
+  for (int l = 0; l < GI_VW; ++l)
+#pragma unroll
+    for (int ch = 0; ch < 3; ++ch) {
+      float4 v = read_imagef(grid, lpv_trilinear_sampler,
+                             (float4)(u[0][l] + 0.5f, u[1][l] + 0.5f, (slab[l] + ch) * LPV_N + u[2][l] + 0.5f, 0.0f));
+      q[ch][0][l] = v.x;
+      q[ch][1][l] = v.y;
+      q[ch][2][l] = v.z;
+      q[ch][3][l] = v.w;
+    }
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch)
+    e[ch] = vloadV(0, q[ch][0]) - vloadV(0, q[ch][1]) * n.y - vloadV(0, q[ch][2]) * n.z - vloadV(0, q[ch][3]) * n.x;
+#else
   intV cx = min(convert_intV(floor(ux)), LPV_N - 2), cy = min(convert_intV(floor(uy)), LPV_N - 2),
        cz = min(convert_intV(floor(uz)), LPV_N - 2);
   floatV fx = ux - convert_floatV(cx), fy = uy - convert_floatV(cy), fz = uz - convert_floatV(cz);
@@ -503,6 +536,7 @@ inline void cascade_irradiance(global const float4* grid, constant float4* casca
     lpv_trilinear(c, fx, fy, fz, q);
     e[ch] = q[0] - q[1] * n.y - q[2] * n.z - q[3] * n.x;  // light arriving travels along −n
   }
+#endif
 }
 
 // Blend factor of seed 003 eq. 3.2: 0 well inside cascade k, rising to 1 over the outer tenth of
@@ -521,7 +555,7 @@ inline floatV cascade_blend(float4 cascade, float3V p) {
 // 1, mixed with the next coarser one by that factor (constant-trip loops only).
 kernel void lpv_lookup(int width, int height, global const float* position, global const float* geoNormal,
                        global const float* normal, global const float* albedo, constant float4* cascades,
-                       int blendCascades, global const float4* grid, global float4* out) {
+                       int blendCascades, LPV_LOOKUP_GRID grid, global float4* out) {
   int x0 = get_global_id(0) * GI_VW, y = get_global_id(1);
   if (x0 >= width || y >= height) return;
   intV x = x0 + GI_LANES;

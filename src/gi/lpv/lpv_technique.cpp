@@ -7,7 +7,7 @@
 // scene bounds, 1..4 camera-centred levels, default 3), extent (metres of the finest cascade;
 // 0 = so that the coarsest covers the scene from the first frame's camera), iterations (0 = the resolution), rsm_size (RSM merged to
 // this size before injection), occlusion (geometry-volume blocking), injection_bias (VPL shift in
-// cells along its normal). Handles diffuse transport only; one bounce (the RSM's).
+// cells along its normal), lookup_storage (auto / buffer / image). Handles diffuse transport only; one bounce (the RSM's).
 #include "gi/lpv/lpv_technique.h"
 
 #include <algorithm>
@@ -31,7 +31,9 @@ public:
                   std::to_string(rsmResolution));
     block_ = rsmResolution / rsmSize;
     cascades_ = p.getInt("lpv.cascades");
-    volume_ = std::make_unique<LpvVolume>(f.ctx, p.getInt("lpv.resolution"), std::max(cascades_, 1));
+    volume_ = std::make_unique<LpvVolume>(f.ctx, p.getInt("lpv.resolution"), std::max(cascades_, 1),
+                                          lookupStorage(p.getChoice("lpv.lookup_storage"), f.ctx.device(),
+                                                        p.getInt("lpv.resolution"), std::max(cascades_, 1)));
   }
 
   void render(const FrameResources& f, cl::Buffer& indirect) override {
@@ -56,6 +58,17 @@ public:
   }
 
 private:
+  // "auto": a 3D image on GPUs that hold one of n × n × 3·n·cascades (hardware trilinear
+  // filtering), a buffer elsewhere (PoCL filters images in software, slower than the kernel's own
+  // interpolation).
+  static LpvLookupStorage lookupStorage(const std::string& choice, const cl::DeviceInfo& device, int n, int cascades) {
+    if (choice == "image") return LpvLookupStorage::Image;  // LpvImage names what the device lacks
+    if (choice != "auto" || !device.isGpu || !device.imageSupport) return LpvLookupStorage::Buffer;
+    size_t depth = 0;  // OpenCL 1.2 guarantees 2048; 128³ × 3 channels × 4 cascades needs 1536
+    clGetDeviceInfo(device.id, CL_DEVICE_IMAGE3D_MAX_DEPTH, sizeof(depth), &depth, nullptr);
+    return size_t(n) * 3 * cascades <= depth ? LpvLookupStorage::Image : LpvLookupStorage::Buffer;
+  }
+
   // The finest cascade's edge: the parameter, or else (fixed at the first frame, so the cells keep
   // their size when the camera moves) the size at which the coarsest cascade, centred on the
   // camera, covers the whole scene with a cell to spare for the snapping.
@@ -90,6 +103,8 @@ TechniqueInfo lpvTechniqueInfo() {
             p.addInt("lpv.rsm_size", 256, 16, 4096, "RSM texels per side after merging for injection; must divide rsm.resolution");
             p.addBool("lpv.occlusion", true, "geometry-volume blocking (from RSM and camera surfels)");
             p.addFloat("lpv.injection_bias", 0.5, 0.0, 2.0, "VPL shift along its normal before injection, in cells");
+            p.addChoice("lpv.lookup_storage", "auto", {"auto", "buffer", "image"},
+                        "grid the lookup reads: a 3D image (hardware trilinear filtering) or a buffer; auto = image on GPUs");
           },
           [] { return std::make_unique<LpvTechnique>(); }};
 }

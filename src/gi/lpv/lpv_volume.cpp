@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include "cl/gather_width.h"
 
@@ -40,6 +42,50 @@ float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveSha
   return float(std::ldexp(1.0, 48) / std::max(bound, 1e-20));
 }
 
+LpvImage::LpvImage(cl::Context& ctx, size_t width, size_t height, size_t depth)
+    : width_(width), height_(height), depth_(depth) {
+  const cl::DeviceInfo& d = ctx.device();
+  if (!d.imageSupport) throw Error("lpv.lookup_storage=image: " + d.name + " has no image support");
+  size_t limit[3] = {0, 0, 0};
+  clGetDeviceInfo(d.id, CL_DEVICE_IMAGE3D_MAX_WIDTH, sizeof(size_t), &limit[0], nullptr);
+  clGetDeviceInfo(d.id, CL_DEVICE_IMAGE3D_MAX_HEIGHT, sizeof(size_t), &limit[1], nullptr);
+  clGetDeviceInfo(d.id, CL_DEVICE_IMAGE3D_MAX_DEPTH, sizeof(size_t), &limit[2], nullptr);
+  if (width > limit[0] || height > limit[1] || depth > limit[2])
+    throw Error("lpv.lookup_storage=image: a 3D image of " + std::to_string(width) + "x" + std::to_string(height) + "x" +
+                std::to_string(depth) + " exceeds " + d.name + "'s limit of " + std::to_string(limit[0]) + "x" +
+                std::to_string(limit[1]) + "x" + std::to_string(limit[2]) + " (fewer cascades or a lower resolution)");
+  ctx.requireAllocation(bytes(), "lpv lookup grid (3D image)");
+  cl_image_format format{CL_RGBA, CL_FLOAT};
+  cl_image_desc desc{};
+  desc.image_type = CL_MEM_OBJECT_IMAGE3D;
+  desc.image_width = width;
+  desc.image_height = height;
+  desc.image_depth = depth;
+  cl_int err = CL_SUCCESS;
+  mem_ = clCreateImage(ctx.get(), CL_MEM_READ_ONLY, &format, &desc, nullptr, &err);
+  cl::check(err, "allocating the lpv lookup grid (3D image, " + std::to_string(bytes()) + " bytes)");
+}
+LpvImage::~LpvImage() {
+  if (mem_) clReleaseMemObject(mem_);
+}
+LpvImage::LpvImage(LpvImage&& o) noexcept
+    : mem_(std::exchange(o.mem_, nullptr)), width_(o.width_), height_(o.height_), depth_(o.depth_) {}
+LpvImage& LpvImage::operator=(LpvImage&& o) noexcept {
+  if (this != &o) {
+    if (mem_) clReleaseMemObject(mem_);
+    mem_ = std::exchange(o.mem_, nullptr);
+    width_ = o.width_;
+    height_ = o.height_;
+    depth_ = o.depth_;
+  }
+  return *this;
+}
+void LpvImage::copy(cl::Context& ctx, const cl::Buffer& src) {
+  const size_t origin[3] = {0, 0, 0}, region[3] = {width_, height_, depth_};
+  cl::check(clEnqueueCopyBufferToImage(ctx.queue(), src.get(), mem_, 0, origin, region, 0, nullptr, nullptr),
+            "copying the lpv lookup grid into its 3D image");
+}
+
 // Cells of a row per propagation work-item: the device's native float vector width (16 with
 // AVX-512, 8 with AVX2, 1 on GPUs; cl/gather_width.h), reduced to a width the row length is a
 // multiple of.
@@ -49,12 +95,16 @@ int propagationLanes(int vectorWidth, int n) {
   return 1;
 }
 
-LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
+LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLookupStorage storage)
     : ctx_(ctx),
+      storage_(storage),
       n_(resolution),
       cascades_(cascadeCount),
       vw_(cl::gatherVectorWidth(ctx)),
       lanes_(propagationLanes(vw_, resolution)) {
+  bool images = storage_ == LpvLookupStorage::Image;
+  if (images)  // the (cascade, channel) slabs stacked along z
+    lookupImage_ = LpvImage(ctx, size_t(n_), size_t(n_), size_t(n_) * 3 * cascades_);
   // GI_VW: texels or pixels per work-item of the injection, surfel and lookup kernels (a divisor of LPV_RUN).
   program_ = ctx.buildProgram("kernels/gi/lpv/lpv.cl", {{"LPV_N", std::to_string(n_)},
                                                          {"LPV_CASCADES", std::to_string(cascades_)},
@@ -62,7 +112,8 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
                                                          {"LPV_LANES", std::to_string(lanes_)},
                                                          {"LPV_PAD", std::to_string(kPad)},
                                                          {"LPV_SKEW", std::to_string(kSkew)},
-                                                         {"GI_VW", std::to_string(vw_)}});
+                                                         {"GI_VW", std::to_string(vw_)},
+                                                         {"LPV_IMAGES", images ? "1" : "0"}});
   inject_ = program_.kernel("lpv_inject");
   geometryRsm_ = program_.kernel("lpv_geometry_rsm");
   geometryCamera_ = program_.kernel("lpv_geometry_camera");
@@ -96,7 +147,8 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount)
 
 uint64_t LpvVolume::bytes() const {
   return layout_.bytes() + gridAcc_.bytes() + geometryAcc_.bytes() + grids_[0].bytes() + grids_[1].bytes() +
-         accumulated_.bytes() + geometry_.bytes() + transmittance_.bytes() + lookupGrid_.bytes();
+         accumulated_.bytes() + geometry_.bytes() + transmittance_.bytes() + lookupGrid_.bytes() +
+         (lookupImage_.get() ? lookupImage_.bytes() : 0);
 }
 
 void LpvVolume::begin(const std::vector<LpvCascade>& layout, float injectionFixedScale) {
@@ -199,8 +251,14 @@ void LpvVolume::propagate(int iterations, bool blocking) {
 void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out) {
   toLookupGrid_.args(accumulated_, layout_, lookupGrid_);
   ctx_.launch(toLookupGrid_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: lookup");
-  lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
-               lookupGrid_, out);
+  if (storage_ == LpvLookupStorage::Image) {
+    lookupImage_.copy(ctx_, lookupGrid_);
+    lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
+                 lookupImage_.get(), out);
+  } else {
+    lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
+                 lookupGrid_, out);
+  }
   size_t groups = (size_t(g.width) + vw_ - 1) / vw_;  // GI_VW pixels per work-item
   ctx_.launch(lookup_, cl::NDRange::d2(cl::roundUp(groups, 16), cl::roundUp(g.height, 4), 16, 4), "lpv: lookup");
 }

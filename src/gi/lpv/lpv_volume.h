@@ -33,6 +33,33 @@ std::vector<LpvCascade> lpvCascadeLayout(const Bounds& bounds, const glm::vec3& 
 // flux all RSMs together can reflect (light power, albedo <= 1), so no cell sum can overflow.
 float lpvInjectionFixedScale(const Scene& scene, const std::vector<ReflectiveShadowMap>& rsms);
 
+// Where the lookup reads the grid from: a float4 buffer interpolated by the kernel, or a 3D image
+// filtered by the sampler (in hardware on GPUs; PoCL filters images in software).
+enum class LpvLookupStorage { Buffer, Image };
+
+// The lookup grid as a read-only 3D image of float4 texels (CL_RGBA, CL_FLOAT: every image-capable
+// OpenCL 1.2 device supports it), filled from a buffer by copy(). Frees itself; moves, never copies.
+class LpvImage {
+public:
+  LpvImage() = default;
+  // Throws gi::Error naming what the device lacks (images at all, or this size).
+  LpvImage(cl::Context& ctx, size_t width, size_t height, size_t depth);
+  ~LpvImage();
+  LpvImage(LpvImage&& o) noexcept;
+  LpvImage& operator=(LpvImage&& o) noexcept;
+  LpvImage(const LpvImage&) = delete;
+  LpvImage& operator=(const LpvImage&) = delete;
+
+  cl_mem get() const { return mem_; }
+  size_t bytes() const { return width_ * height_ * depth_ * 16; }
+  // The whole image from `src`, which holds its texels row after row, slice after slice.
+  void copy(cl::Context& ctx, const cl::Buffer& src);
+
+private:
+  cl_mem mem_ = nullptr;
+  size_t width_ = 0, height_ = 0, depth_ = 0;
+};
+
 class LpvVolume {
 public:
   static constexpr int kRunLength = 16;  // texels a work-item merges before its atomic adds
@@ -40,7 +67,8 @@ public:
   static constexpr int kSkew = 32;       // floats after each plane (lpv.cl LPV_SKEW: planes not 2^k apart)
   static constexpr float kGeometryFixedScale = 1099511627776.0f;  // 2^40
 
-  LpvVolume(cl::Context& ctx, int resolution, int cascadeCount);
+  // Throws gi::Error when `storage` is Image and the device has no 3D images of the size needed.
+  LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLookupStorage storage = LpvLookupStorage::Buffer);
 
   int resolution() const { return n_; }
   int cascadeCount() const { return cascades_; }
@@ -78,12 +106,14 @@ private:
   std::vector<glm::vec4> readGrid(const cl::Buffer& b);
 
   cl::Context& ctx_;
+  LpvLookupStorage storage_;
   int n_, cascades_, vw_, lanes_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
   float injectionScale_ = 1.0f;
   cl::Program program_;
   cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, transmittanceKernel_, propagate_,
       toLookupGrid_, lookup_;
   cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, transmittance_, lookupGrid_;
+  LpvImage lookupImage_;  // with LpvLookupStorage::Image: lookupGrid_'s copy the lookup samples
   cl::NDRange propagateRange_;
   int current_ = 0;
 };
