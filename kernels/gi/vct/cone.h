@@ -30,7 +30,7 @@ typedef struct {
 // a level coarser than that bound.
 inline float vct_footprint(float tanHalf, float t, float h0, float cosN) {
   float bound = (h0 + t * cosN - 1.0f) * (1.0f / 1.5f);
-  float cap = bound >= 1.0f ? exp2(floor(log2(bound))) : 1.0f;
+  float cap = bound >= 1.0f ? as_float(as_uint(bound) & 0xff800000u) : 1.0f;  // clear the mantissa
   return fmax(1.0f, fmin(2.0f * tanHalf * t, cap));
 }
 

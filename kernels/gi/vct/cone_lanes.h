@@ -1,12 +1,12 @@
-// The diffuse cone march of cone.h with GI_VW pixels per work-item (common/vector_width.h;
+// The cone march of cone.h with GI_VW pixels per work-item (common/vector_width.h;
 // PERFORMANCE_FACTS.md points 1-2: a data-dependent loop over one pixel per work-item runs as
 // scalar code on PoCL, explicit lanes do not).
 //
-// Every cone of a diffuse set has the same aperture and a fixed angle to the normal, so its sample
-// distances t_k, diameters, mip levels, step ratios and footprint caps are the same for every
-// pixel: they are computed once per step (scalar), and only positions, lookups and compositing are
-// per lane. A lane that leaves the grid or saturates is masked from then on (vct_cone breaks
-// there); the march ends when every lane is done. Same formulas as vct_cone, term for term.
+// Each lane marches its own cone (aperture, angle to its normal, hence its own distances, levels
+// and footprint caps); for the diffuse set these are the same in every lane, so the lanes step in
+// lockstep. A lane that leaves the grid, passes the maximum distance or saturates is masked from
+// then on (vct_cone breaks there); the march ends when every lane is done. Same formulas as
+// vct_cone, term for term, with log2/exp2 lane-wise (log2V, pow01V).
 #pragma once
 #include "common/vector_width.h"
 #include "gi/vct/cone.h"
@@ -36,11 +36,11 @@ inline VoxelMipsV vox_mips_lanes(VoxelMips m) {
   return r;
 }
 
-// acc += weight × the trilinear lookup at p of the volume of n³ voxels starting at voxel `base`
-// (per lane) of `vol` (radiance, α) or, with SH voxels, of `shVol` evaluated against basis
+// acc += weight × the trilinear lookup at p of the volume of n³ voxels (scale = n / N) starting at
+// voxel `base` (all per lane) of `vol` (radiance, α) or, with SH voxels, of `shVol` evaluated against basis
 // (Y0, Y1y, Y1z, Y1x) with α from `vol` (vox_trilinear / vox_trilinear_sh).
-inline void vox_trilinear_lanes(global const float* vol, global const float* shVol, intV base, int n, float3V p,
-                                float scale, floatV weight, floatV Y0, floatV Y1y, floatV Y1z, floatV Y1x, RgbaV* acc) {
+inline void vox_trilinear_lanes(global const float* vol, global const float* shVol, intV base, intV n, float3V p,
+                                floatV scale, floatV weight, floatV Y0, floatV Y1y, floatV Y1z, floatV Y1x, RgbaV* acc) {
   floatV ux = p.x * scale - 0.5f, uy = p.y * scale - 0.5f, uz = p.z * scale - 0.5f;
   floatV flx = floor(ux), fly = floor(uy), flz = floor(uz);
   floatV fx = ux - flx, fy = uy - fly, fz = uz - flz;
@@ -71,35 +71,47 @@ inline void vox_trilinear_lanes(global const float* vol, global const float* shV
   }
 }
 
-// acc += weight × level `level` seen along d (vox_level_sample).
-inline void vox_level_sample_lanes(VoxelMipsV m, int level, float3V p, float3V d, floatV weight, RgbaV* acc) {
-  int n = m.N >> level;
-  float scale = 1.0f / (float)(1 << level);
+// acc += weight × level `level` (per lane) seen along d (vox_level_sample). Level offsets in closed
+// form: Σ_{l<L} (N >> l)³ = 8·(N³ − n³)/7 with n = N >> L.
+inline void vox_level_sample_lanes(VoxelMipsV m, intV level, float3V p, float3V d, floatV weight, RgbaV* acc) {
+  intV n = (intV)(m.N) >> level;
+  floatV scale = convert_floatV(n) * (1.0f / (float)m.N);
+  int N3 = m.N * m.N * m.N;
+  intV n3 = n * n * n;
+  intV offset = 8 * (N3 - n3) / 7;
   // Light arriving at the apex travels along −d: the SH basis at −d.
   floatV Y0 = (floatV)(GI_SH_Y0), Y1y = -GI_SH_Y1 * d.y, Y1z = -GI_SH_Y1 * d.z, Y1x = -GI_SH_Y1 * d.x;
-  if (!m.anisotropic || level == 0) {
-    vox_trilinear_lanes(m.iso, m.sh, (intV)((int)vox_level_offset(m.N, level)), n, p, scale, weight, Y0, Y1y, Y1z,
+  intV isoLanes = level == 0;
+  if (!m.anisotropic) isoLanes = (intV)(-1);
+  if (GI_ANY(isoLanes))
+    vox_trilinear_lanes(m.iso, m.sh, offset, n, p, scale, GI_SEL((floatV)(0.0f), weight, isoLanes), Y0, Y1y, Y1z,
                         Y1x, acc);
-    return;
-  }
+  if (!m.anisotropic || GI_ALL(isoLanes)) return;
   floatV da[3] = {d.x, d.y, d.z};
+  // Lanes at level 0 read the first voxel of the directional volumes, with weight 0 (level 0 has
+  // none: n = N would read past their end).
+  intV nDirectional = GI_SEL(n, (intV)(1), isoLanes);
   for (int axis = 0; axis < 3; ++axis) {
-    intV positive = (int)vox_aniso_offset(m.N, level, 2 * axis), negative = (int)vox_aniso_offset(m.N, level, 2 * axis + 1);
-    vox_trilinear_lanes(m.aniso, m.shAniso, GI_SEL(negative, positive, da[axis] >= 0.0f), n, p, scale,
-                        weight * da[axis] * da[axis], Y0, Y1y, Y1z, Y1x, acc);
+    // Directional volume 2·axis (+) or 2·axis + 1 (−) of the level (vox_aniso_offset).
+    intV dir = 2 * axis + GI_SEL((intV)(1), (intV)(0), da[axis] >= 0.0f);
+    intV base = 6 * (offset - N3) + dir * n3;
+    vox_trilinear_lanes(m.aniso, m.shAniso, GI_SEL(base, (intV)(0), isoLanes), nDirectional, p, scale,
+                        GI_SEL(weight * da[axis] * da[axis], (floatV)(0.0f), isoLanes), Y0, Y1y, Y1z, Y1x, acc);
   }
 }
 
-// vox_sample for the lanes: quadrilinear at the (uniform) fractional level.
-inline RgbaV vox_sample_lanes(VoxelMipsV m, float3V p, float3V d, float level) {
+// vox_sample for the lanes: quadrilinear at a fractional level per lane.
+inline RgbaV vox_sample_lanes(VoxelMipsV m, float3V p, float3V d, floatV level) {
   level = clamp(level, 0.0f, (float)(m.levels - 1));
-  int l0 = (int)floor(level);
-  float f = level - (float)l0;
+  floatV fl = floor(level);
+  intV l0 = convert_intV(fl);
+  floatV f = level - fl;
+  intV second = f > 0.0f && l0 + 1 < m.levels;
+  floatV w1 = GI_SEL((floatV)(0.0f), f, second);
   RgbaV c;
   c.r = c.g = c.b = c.a = (floatV)(0.0f);
-  bool second = f > 0.0f && l0 + 1 < m.levels;
-  vox_level_sample_lanes(m, l0, p, d, (floatV)(second ? 1.0f - f : 1.0f), &c);
-  if (second) vox_level_sample_lanes(m, l0 + 1, p, d, (floatV)(f), &c);
+  vox_level_sample_lanes(m, l0, p, d, 1.0f - w1, &c);
+  if (GI_ANY(second)) vox_level_sample_lanes(m, min(l0 + 1, m.levels - 1), p, d, w1, &c);
 #if GI_VCT_SH
   c.r = fmax(c.r, 0.0f);
   c.g = fmax(c.g, 0.0f);
@@ -108,11 +120,10 @@ inline RgbaV vox_sample_lanes(VoxelMipsV m, float3V p, float3V d, float level) {
   return c;
 }
 
-// x^r for x in [0, 1] and r > 0, lane-wise without library calls (powr is a scalar library call
-// on PoCL, PERFORMANCE_FACTS point 4): log2 from the exponent bits and the atanh series of the
-// mantissa scaled into [√½, √2), exp2 from the exponent bits and a Taylor polynomial on
-// [−½, ½]; relative error below 1e-6 (x = 0 gives 2^(−127·r) instead of 0).
-inline floatV pow01V(floatV x, float r) {
+// log2(x) for positive normal x, lane-wise without library calls (PERFORMANCE_FACTS point 4):
+// the exponent bits plus the atanh series of the mantissa scaled into [√½, √2); absolute error
+// below 1e-7.
+inline floatV log2V(floatV x) {
   uintV bits = as_uintV(x);
   intV e = convert_intV(bits >> 23) - 127;
   floatV m = as_floatV((bits & 0x007fffffu) | 0x3f800000u);  // [1, 2)
@@ -120,36 +131,52 @@ inline floatV pow01V(floatV x, float r) {
   m = GI_SEL(m, 0.5f * m, high);
   e = GI_SEL(e, e + 1, high);
   floatV s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
-  floatV log2x = convert_floatV(e) + 2.88539008f * s * (1.0f + s2 * (1.0f / 3.0f + s2 * (0.2f + s2 * (1.0f / 7.0f))));
-  floatV y = fmax(r * log2x, -126.0f);
+  return convert_floatV(e) + 2.88539008f * s * (1.0f + s2 * (1.0f / 3.0f + s2 * (0.2f + s2 * (1.0f / 7.0f))));
+}
+
+// x^r for x in [0, 1] and r > 0 lane-wise: exp2(r·log2V(x)), exp2 from the exponent bits and a
+// Taylor polynomial on [−½, ½]; relative error below 1e-6 (x = 0 gives 2^(−127·r), not 0).
+inline floatV pow01V(floatV x, floatV r) {
+  floatV y = fmax(r * log2V(x), -126.0f);
   floatV i = floor(y + 0.5f);
   floatV f = (y - i) * 0.693147181f;
   floatV p = 1.0f + f * (1.0f + f * (0.5f + f * (1.0f / 6.0f + f * (1.0f / 24.0f + f * (1.0f / 120.0f + f * (1.0f / 720.0f))))));
   return p * as_floatV(convert_uintV(convert_intV(i) + 127) << 23);
 }
 
-// vct_cone for GI_VW cones of the same aperture and angle to their surfaces' normals (cosN),
-// from o along d: radiance (r, g, b) and opacity a arriving along them, and the AO occlusion.
-inline RgbaV vct_cone_lanes(VoxelMipsV m, float3V o, float3V d, float tanHalf, float maxDistance, float stepFactor,
-                            float aoLambda, float h0, float cosN, floatV* occlusion) {
+// vct_footprint lane-wise; the largest power of two ≤ the bound by clearing its mantissa.
+inline floatV vct_footprint_lanes(floatV tanHalf, floatV t, float h0, floatV cosN) {
+  floatV bound = (h0 + t * cosN - 1.0f) * (1.0f / 1.5f);
+  floatV cap = GI_SEL((floatV)(1.0f), as_floatV(as_uintV(bound) & 0xff800000u), bound >= 1.0f);
+  return fmax(1.0f, fmin(2.0f * tanHalf * t, cap));
+}
+
+// vct_cone for GI_VW cones from o along d, of half-angle tan tanHalf, whose axes make cosine cosN
+// with their surfaces' normals: radiance (r, g, b) and opacity a arriving along them, and the AO
+// occlusion.
+inline RgbaV vct_cone_lanes(VoxelMipsV m, float3V o, float3V d, floatV tanHalf, float maxDistance, float stepFactor,
+                            float aoLambda, float h0, floatV cosN, floatV* occlusion) {
   RgbaV c;
   c.r = c.g = c.b = c.a = (floatV)(0.0f);
   floatV occ = (floatV)(0.0f);
   intV done = (intV)(0);
-  float t = 0.0f;
+  floatV t = (floatV)(0.0f);
   float limit = (float)m.N;
   for (;;) {
-    float diameter;
-    float step = vct_cone_advance(tanHalf, stepFactor, h0, cosN, &t, &diameter);
-    if (t > maxDistance) break;
-    float margin = 0.5f * diameter;
-    float3V p = addV(o, scaleV(d, (floatV)(t)));
-    done = done || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin ||
+    // vct_cone_advance
+    floatV step = fmax(0.5f, stepFactor * vct_footprint_lanes(tanHalf, t, h0, cosN));
+    t += step;
+    floatV diameter = vct_footprint_lanes(tanHalf, t, h0, cosN);
+    floatV margin = 0.5f * diameter;
+    float3V p = addV(o, scaleV(d, t));
+    done = done || t > maxDistance || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin ||
            p.y > limit + margin || p.z > limit + margin;
     if (GI_ALL(done)) break;
-    if (h0 + t * cosN - 1.0f < 1.5f) continue;  // footprint in front: nothing sampled below h = 2.5
-    RgbaV s = vox_sample_lanes(m, p, d, log2(diameter));
-    intV live = !done && s.a > 1e-6f;
+    // Footprint in front: nothing sampled below h = 2.5 voxels.
+    intV sampled = !done && h0 + t * cosN - 1.0f >= 1.5f;
+    if (!GI_ANY(sampled)) continue;
+    RgbaV s = vox_sample_lanes(m, p, d, log2V(diameter));
+    intV live = sampled && s.a > 1e-6f;
     floatV alpha = fmin(s.a, 1.0f);
     floatV corrected = 1.0f - pow01V(1.0f - alpha, step / diameter);
     floatV k = GI_SEL((floatV)(0.0f), (1.0f - c.a) * (corrected / s.a), live);
@@ -184,8 +211,8 @@ inline RgbaV vct_diffuse_irradiance_lanes(VoxelMipsV m, float3V p, float3V n, fl
     float3V d = addV(addV(scaleV(t, (floatV)(cone.x)), scaleV(b, (floatV)(cone.y))), scaleV(n, (floatV)(cone.z)));
     d = scaleV(d, rsqrt(dotV(d, d)));
     floatV occ;
-    RgbaV r = vct_cone_lanes(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
-                             footprintInFront ? startOffset : INFINITY, cone.z, &occ);
+    RgbaV r = vct_cone_lanes(m, o, d, (floatV)(VCT_DIFFUSE_TAN_HALF), maxDistance, stepFactor, aoLambda,
+                             footprintInFront ? startOffset : INFINITY, (floatV)(cone.z), &occ);
     E.r += cone.w * r.r;
     E.g += cone.w * r.g;
     E.b += cone.w * r.b;

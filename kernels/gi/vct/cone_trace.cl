@@ -1,6 +1,6 @@
 // The cone-traced passes of `vct` (ALGORITHMS.md §5; cone.h for the march and the cone sets).
 // Build defines: GI_VCT_CONES (6 or 9), GI_DOWN (diffuse tracing every GI_DOWN-th pixel), GI_VW
-// (pixels per work-item of vct_diffuse, common/vector_width.h), GI_VCT_SH
+// (pixels per work-item of vct_diffuse and vct_specular, common/vector_width.h), GI_VCT_SH
 // (1: SH voxels, read from `sh` / `shAniso`; voxel_grid.h).
 // Every kernel takes the four mip chains iso, aniso, sh, shAniso (voxel_grid.h); the unread ones may
 // be any buffer.
@@ -9,9 +9,10 @@
 //               GI_VW adjacent traced pixels per work-item (cone_lanes.h).
 //               GI_DOWN = 1 writes L = ρ/π · E (· voxel AO visibility if asked) per pixel;
 //               GI_DOWN > 1 writes E for the geometry-aware upsampler (filters/discontinuity.cl).
-// vct_specular  per pixel: adds F_Schlick(F0, n·ωo) · L_cone along the mirror direction, the cone's
-//               half-angle from the GGX width, tan θ = α (α = roughness²). The BRDF's directional
-//               albedo is approximated by F(n·ωo) alone (no masking term).
+// vct_specular  per pixel (GI_VW per work-item, cone_lanes.h): adds F_Schlick(F0, n·ωo) · L_cone
+//               along the mirror direction, the cone's half-angle from the GGX width, tan θ = α
+//               (α = roughness²). The BRDF's directional albedo is approximated by F(n·ωo) alone
+//               (no masking term).
 // vct_bounce    per occupied voxel: its injected direct level-0 radiance plus ρ/π · E_indirect, the
 //               diffuse cones from the voxel's surface point along its normal through the current
 //               mips. Run k − 1 times (re-mipping in between) for k bounces: each run adds one more
@@ -96,26 +97,46 @@ kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int w
     out[(size_t)v * lowWidth + u0 + l] = (float4)(vals[0][l], vals[1][l], vals[2][l], 0.0f);
 }
 
-kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiView camera, global const float4* gPosition, global const float4* gNormal,
+kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiView camera,
+                         global const float4* gPosition, global const float4* gNormal,
                          global const float4* gSpecular, global float4* out) {
-  int x = get_global_id(0), y = get_global_id(1);
-  if (x >= camera.width || y >= camera.height) return;
-  size_t i = (size_t)y * camera.width + x;
-  float4 pos = gPosition[i];
-  if (pos.w == 0.0f) return;
-  float3 n = gNormal[i].xyz;
-  float3 wo = camera.orthographic
-                  ? -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz)
-                  : normalize(vload3(0, camera.eye) - pos.xyz);
-  float nv = dot(n, wo);
-  if (nv <= 0.0f) return;
-  float4 spec = gSpecular[i];
-  float3 r = 2.0f * nv * n - wo;
-  float tanHalf = ggx_alpha(spec.w);
-  ConeResult c = vct_cone(vct_mips(grid, tp, iso, aniso, sh, shAniso), vct_to_voxels(grid, pos.xyz) + n * tp.startOffset,
-                          r, tanHalf, tp.maxDistance, tp.stepFactor, tp.aoLambda,
-                          tp.footprintInFront ? tp.startOffset : INFINITY, dot(r, n));
-  out[i].xyz += fresnel_schlick(spec.xyz, nv) * c.radiance.xyz;
+  int gx = get_global_id(0), y = get_global_id(1);
+  int x0 = gx * GI_VW;
+  if (x0 >= camera.width || y >= camera.height) return;
+  intV q = (intV)(y * camera.width) + min(x0 + GI_LANES, camera.width - 1);
+  floatV px, py, pz, pw, nx, ny, nz, nw, f0r, f0g, f0b, roughness;
+  GI_GATHER_AOS4(float, (global const float*)gPosition, q, px, py, pz, pw)
+  GI_GATHER_AOS4(float, (global const float*)gNormal, q, nx, ny, nz, nw)
+  float3V n = f3v(nx, ny, nz), wo;
+  if (camera.orthographic) {
+    float3 w = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
+    wo = f3v((floatV)(w.x), (floatV)(w.y), (floatV)(w.z));
+  } else {
+    wo = f3v(camera.eye[0] - px, camera.eye[1] - py, camera.eye[2] - pz);
+    wo = scaleV(wo, rsqrt(dotV(wo, wo)));
+  }
+  floatV nv = dotV(n, wo);
+  intV active = pw != 0.0f && nv > 0.0f;
+  if (!GI_ANY(active)) return;
+  GI_GATHER_AOS4(float, (global const float*)gSpecular, q, f0r, f0g, f0b, roughness)
+  float3V r = subV(scaleV(n, 2.0f * nv), wo);
+  floatV tanHalf = fmax(roughness * roughness, GI_MIN_GGX_ALPHA);  // ggx_alpha
+  float3 origin = vload3(0, grid.origin);
+  float3V p = f3v((px - origin.x) / grid.voxel_size, (py - origin.y) / grid.voxel_size,
+                  (pz - origin.z) / grid.voxel_size);
+  floatV occ;
+  RgbaV c = vct_cone_lanes(vox_mips_lanes(vct_mips(grid, tp, iso, aniso, sh, shAniso)),
+                           addV(p, scaleV(n, (floatV)(tp.startOffset))), r, tanHalf, tp.maxDistance, tp.stepFactor,
+                           tp.aoLambda, tp.footprintInFront ? tp.startOffset : INFINITY, dotV(r, n), &occ);
+  // fresnel_schlick(F0, n·ωo) lane-wise
+  floatV mm = clamp(1.0f - nv, 0.0f, 1.0f), m5 = mm * mm * mm * mm * mm;
+  float vals[4][GI_VW];
+  vstoreV((f0r + (1.0f - f0r) * m5) * c.r, 0, vals[0]);
+  vstoreV((f0g + (1.0f - f0g) * m5) * c.g, 0, vals[1]);
+  vstoreV((f0b + (1.0f - f0b) * m5) * c.b, 0, vals[2]);
+  vstoreV(GI_SEL((floatV)(0.0f), (floatV)(1.0f), active), 0, vals[3]);
+  for (int l = 0; l < GI_VW && x0 + l < camera.width; ++l)
+    if (vals[3][l] != 0.0f) out[(size_t)y * camera.width + x0 + l].xyz += (float3)(vals[0][l], vals[1][l], vals[2][l]);
 }
 
 kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* acc, global const float4* direct,

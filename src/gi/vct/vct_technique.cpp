@@ -114,7 +114,8 @@ public:
     }
     if (p.getBool("vct.specular")) {
       specular_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, g.view, g.position, g.normal, g.specular, indirect);
-      f.ctx.launch(specular_, cl::NDRange::d2(cl::roundUp(g.width, 8), cl::roundUp(g.height, 8), 8, 8),
+      int items = (g.width + lanes_ - 1) / lanes_;
+      f.ctx.launch(specular_, cl::NDRange::d2(cl::roundUp(items, 8), cl::roundUp(g.height, 8), 8, 8),
                    "vct: specular cone");
     }
   }
