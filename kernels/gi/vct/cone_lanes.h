@@ -83,13 +83,14 @@ inline void vox_level_sample_lanes(VoxelMipsV m, intV level, float3V p, float3V 
   floatV Y0 = (floatV)(GI_SH_Y0), Y1y = -GI_SH_Y1 * d.y, Y1z = -GI_SH_Y1 * d.z, Y1x = -GI_SH_Y1 * d.x;
   intV isoLanes = level == 0;
   if (!m.anisotropic) isoLanes = (intV)(-1);
+  // Lanes masked out of a volume (weight 0) read its first voxel only (n = 1, base 0): the
+  // isotropic levels ≥ 1 are not built with anisotropic mips, and level 0 has no directional
+  // volumes; unwritten memory could hold NaN, and NaN·0 is NaN.
   if (GI_ANY(isoLanes))
-    vox_trilinear_lanes(m.iso, m.sh, offset, n, p, scale, GI_SEL((floatV)(0.0f), weight, isoLanes), Y0, Y1y, Y1z,
-                        Y1x, acc);
+    vox_trilinear_lanes(m.iso, m.sh, GI_SEL((intV)(0), offset, isoLanes), GI_SEL((intV)(1), n, isoLanes), p, scale,
+                        GI_SEL((floatV)(0.0f), weight, isoLanes), Y0, Y1y, Y1z, Y1x, acc);
   if (!m.anisotropic || GI_ALL(isoLanes)) return;
   floatV da[3] = {d.x, d.y, d.z};
-  // Lanes at level 0 read the first voxel of the directional volumes, with weight 0 (level 0 has
-  // none: n = N would read past their end).
   intV nDirectional = GI_SEL(n, (intV)(1), isoLanes);
   for (int axis = 0; axis < 3; ++axis) {
     // Directional volume 2·axis (+) or 2·axis + 1 (−) of the level (vox_aniso_offset).
