@@ -12,6 +12,14 @@
 #include "common/sh.h"
 #include "gi/vct/voxel_types.h"
 
+// (x, y, z) of cell v of a cube of n³ cells, n a power of two: shifts and masks instead of 64-bit
+// divisions (v < 2^24 for n ≤ 256).
+inline int3 vox_cell(size_t v, int n) {
+  int s = 31 - clz(n);
+  uint u = (uint)v, m = (uint)n - 1u;
+  return (int3)((int)(u & m), (int)((u >> s) & m), (int)(u >> (2 * s)));
+}
+
 inline size_t vox_level_offset(int N, int level) {
   size_t off = 0;
   for (int l = 0; l < level; ++l) {
@@ -149,8 +157,7 @@ inline VoxelSurface vox_resolve(GiVoxelGrid grid, global const uint* acc, size_t
                           iacc[(GI_VOX_NORMAL + 2) * plane + v]) * (invW * 4.0f / GI_VOX_UNIT);
   float3 offset = (float3)(iacc[GI_VOX_OFFSET * plane + v], iacc[(GI_VOX_OFFSET + 1) * plane + v],
                            iacc[(GI_VOX_OFFSET + 2) * plane + v]) * (invW * 4.0f / GI_VOX_UNIT);
-  int x = (int)(v % (size_t)N), y = (int)((v / (size_t)N) % (size_t)N), z = (int)(v / ((size_t)N * N));
-  r.position = vload3(0, grid.origin) + ((float3)((float)x, (float)y, (float)z) + 0.5f + offset) * grid.voxel_size;
+  r.position = vload3(0, grid.origin) + (convert_float3(vox_cell(v, N)) + 0.5f + offset) * grid.voxel_size;
   r.twoSided = length(meanN) < 0.5f;
   r.normal = safe_normalize(meanN, (float3)(0.0f, 1.0f, 0.0f));
   return r;

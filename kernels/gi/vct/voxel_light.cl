@@ -56,7 +56,8 @@ kernel void vct_mip_isotropic(int N, int level, global float4* iso) {
   int n = N >> level, nc = n * 2;
   size_t v = get_global_id(0);
   if (v >= (size_t)n * n * n) return;
-  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  int3 cell = vox_cell(v, n);
+  int x = cell.x, y = cell.y, z = cell.z;
   global const float4* child = iso + vox_level_offset(N, level - 1);
   float4 sum = (float4)(0.0f);
   for (int dz = 0; dz < 2; ++dz)
@@ -81,10 +82,10 @@ inline void vox_column(int dir, int i, int j, int3 b, int nc, size_t* front, siz
 // Work-item gid of a kernel over 6 directions × n³ parent cells: returns the cell's index, sets
 // its direction (≥ 6: past the end) and 2 × its cell coordinates.
 inline size_t vox_directional_item(size_t gid, int n, int* dir, int3* childBase) {
-  size_t cells = (size_t)n * n * n;
-  *dir = (int)(gid / cells);
-  size_t v = gid % cells;
-  *childBase = 2 * (int3)((int)(v % (size_t)n), (int)((v / (size_t)n) % (size_t)n), (int)(v / ((size_t)n * n)));
+  int s3 = 3 * (31 - clz(n));  // cells = n³ = 2^s3
+  *dir = (int)(gid >> s3);
+  size_t v = gid & (((size_t)1 << s3) - 1);
+  *childBase = 2 * vox_cell(v, n);
   return v;
 }
 
@@ -132,7 +133,8 @@ kernel void vct_mip_sh_isotropic(int N, int level, global float4* sh) {
   int n = N >> level, nc = n * 2;
   size_t v = get_global_id(0);
   if (v >= (size_t)n * n * n) return;
-  int x = (int)(v % (size_t)n), y = (int)((v / (size_t)n) % (size_t)n), z = (int)(v / ((size_t)n * n));
+  int3 cell = vox_cell(v, n);
+  int x = cell.x, y = cell.y, z = cell.z;
   global const float4* child = sh + 3 * vox_level_offset(N, level - 1);
   float4 sum[3] = {(float4)(0.0f), (float4)(0.0f), (float4)(0.0f)};
   for (int dz = 0; dz < 2; ++dz)
