@@ -14,8 +14,8 @@
 //   lpv_resolve_geometry  fixed-point sums -> blocking potential per node: of the two surfel sources
 //                         (RSM, camera) the one that saw more surface at the node (larger DC term);
 //                         summing both would count a surface seen by both twice.
-//   lpv_transmittance     per cell and incoming face, the fraction of the neighbour's light the
-//                         geometry volume lets through, once per frame (static over the steps).
+//   lpv_face_geometry     blocking potential per cell face (mean of its 4 corner nodes), once per
+//                         frame: the geometry volume does not change over the steps.
 //   lpv_propagate         one gather step: each cell collects from its 6 neighbours, 5 faces each.
 //   lpv_lookup_grid       accumulated grid -> the lookup grid (irradiance coefficients, float4 per
 //                         cell and channel; copied into a 3D image on devices that filter images
@@ -37,7 +37,7 @@
 //            the buffer;
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
 //   geometry float planes [cascade][coefficient][node]; geometryAcc long [cascade][source rsm, camera][node][4]
-//   transmittance float planes [cascade][direction][face][cell] (padded like grid)
+//   faceGeometry float planes [cascade][axis][coefficient][cell] (padded like grid)
 //   lookupGrid float4 [cascade][channel][cell] (lpv_lookup_grid)
 //   cascades float4 [cascade]: (origin xyz of cell (0,0,0)'s corner, cell edge s), metres
 // The propagation works on LPV_LANES cells of a row per work-item, the injection and surfel
@@ -322,39 +322,37 @@ typedef int intL;
 // Index of axis a's linear SH coefficient in the (Y00, y, z, x) order.
 #define LPV_COEF(a) ((a) == 0 ? 3 : (a))
 #define LPV_SIDE_SCALE 0.4472135955f  // 1/√5: ω = normalize(2·d ± e_b)
-// Transmittance planes per cascade: 6 directions × 5 faces (main, +b1, −b1, +b2, −b2).
-#define LPV_FACES 30
-#define LPV_T_PLANE(k, dir, face) ((size_t)(((k) * 6 + (dir)) * 5 + (face)) * LPV_STRIDE)
-
-// T_f of every direction and face of a destination cell, once per frame: the geometry volume does
-// not change over the propagation steps. Planes [cascade][direction][face][cell] after LPV_PAD
-// floats, like the grids. One work-item per (cell, direction, cascade): global (LPV_CELLS, 6,
-// LPV_CASCADES). A neighbour outside the grid sends nothing, whatever T is there.
-kernel void lpv_transmittance(global const float* geometry, global float* transmittance) {
-  size_t cell = get_global_id(0), dir = get_global_id(1), k = get_global_id(2);
-  int a = dir / 2;
-  float s = dir % 2 ? -1.0f : 1.0f;
-  int3 c = (int3)(cell % LPV_N, (cell / LPV_N) % LPV_N, cell / (LPV_N * LPV_N));
-  // The shared face's 4 corner nodes: on the plane between neighbour and cell along a.
-  int3 base = c + (int3)(a == 0 && s < 0.0f, a == 1 && s < 0.0f, a == 2 && s < 0.0f);
-  size_t n0 = (size_t)(base.z * LPV_M + base.y) * LPV_M + base.x;
+// Blocking potential at each cell's 3 lower faces, once per frame (the geometry volume does not
+// change over the propagation steps): the mean of the 4 corner nodes of the face between cell
+// c − e_a and c. Planes [cascade][axis a][coefficient][cell] after LPV_PAD floats, like the grids.
+// One work-item per (cell, axis, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
+kernel void lpv_face_geometry(global const float* geometry, global float* faceGeometry) {
+  size_t cell = get_global_id(0), a = get_global_id(1), k = get_global_id(2);
+  int x = cell % LPV_N, y = (cell / LPV_N) % LPV_N, z = cell / (LPV_N * LPV_N);
+  size_t n0 = (size_t)(z * LPV_M + y) * LPV_M + x;
   size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;  // the face's two in-plane axes
-  float g[4];
   for (int q = 0; q < 4; ++q) {
     global const float* plane = geometry + (k * 4 + q) * LPV_NODES + n0;
-    g[q] = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
+    faceGeometry[LPV_PAD + LPV_PLANE(k, a, q) + cell] = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
   }
+}
+
+// T_f of the 5 faces for light along direction dir from the blocking potential g (4 coefficients)
+// of the face the two cells share: ΔΩ_f/π · (1 − clamp(GV · Y(−ω_f), 0, 1)).
+inline void lpv_transmittance(int dir, const floatL* g, floatL* t) {
+  int a = dir / 2;
+  float s = dir % 2 ? -1.0f : 1.0f;
   int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
   // GV · Y(−ω) for ω = d (main) and normalize(2d ± e_b) (sides).
-  float main = GI_SH_Y0 * g[0] - GI_SH_Y1 * s * g[LPV_COEF(a)];
-  float side = GI_SH_Y0 * g[0] - (GI_SH_Y1 * LPV_SIDE_SCALE) * (2.0f * s) * g[LPV_COEF(a)];
-  float sideB1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b1)], sideB2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b2)];
-  float potential[5] = {main, side - sideB1, side + sideB1, side - sideB2, side + sideB2};
-  global float* t = transmittance + LPV_PAD + cell;
-  for (int f = 0; f < 5; ++f) {
-    float solidAngle = f == 0 ? LPV_MAIN_FACE_SOLID_ANGLE : LPV_SIDE_FACE_SOLID_ANGLE;
-    t[LPV_T_PLANE(k, dir, f)] = solidAngle * GI_INV_PI * (1.0f - clamp(potential[f], 0.0f, 1.0f));
-  }
+  floatL main = GI_SH_Y0 * g[0] - (GI_SH_Y1 * s) * g[LPV_COEF(a)];
+  floatL side = GI_SH_Y0 * g[0] - (GI_SH_Y1 * LPV_SIDE_SCALE * 2.0f * s) * g[LPV_COEF(a)];
+  floatL sideB1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b1)], sideB2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b2)];
+  const float mainWeight = LPV_MAIN_FACE_SOLID_ANGLE * GI_INV_PI, sideWeight = LPV_SIDE_FACE_SOLID_ANGLE * GI_INV_PI;
+  t[0] = mainWeight * (1.0f - clamp(main, 0.0f, 1.0f));
+  t[1] = sideWeight * (1.0f - clamp(side - sideB1, 0.0f, 1.0f));
+  t[2] = sideWeight * (1.0f - clamp(side + sideB1, 0.0f, 1.0f));
+  t[3] = sideWeight * (1.0f - clamp(side - sideB2, 0.0f, 1.0f));
+  t[4] = sideWeight * (1.0f - clamp(side + sideB2, 0.0f, 1.0f));
 }
 
 // Adds the light channel `in` (4 coefficient planes) of the neighbour in direction `dir` sends
@@ -377,20 +375,37 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
 }
 
 // One gather step. Work-item = LPV_LANES destination cells of a row (global (N / LPV_LANES, N,
-// N·cascades)); channel after channel, so that only 4 accumulators and one neighbour's 4
-// coefficients are live (16 float16 would not fit AVX2's registers). `blocking` = 0 uses the
-// unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them — or
-// occlusion off).
+// N·cascades)). The 30 face transmittances T_f first (from the shared faces' blocking potential,
+// kept in private memory), then channel after channel, so that only 4 accumulators and one
+// neighbour's 4 coefficients are live (16 float16 would not fit AVX2's registers). `blocking` = 0
+// uses the unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them —
+// or occlusion off).
 kernel void lpv_propagate(global const float* src, global float* dst, global float* accumulated,
-                          global const float* transmittance, int blocking) {
+                          global const float* faceGeometry, int blocking) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1);
   int z = get_global_id(2) % LPV_N, k = get_global_id(2) / LPV_N;
   int cell = (z * LPV_N + y) * LPV_N + x0;
-  global const float* tCell = transmittance + LPV_PAD + LPV_T_PLANE(k, 0, 0) + cell;
   intL x = x0 + LPV_LANE_IDS;
   intL insideLeft = x >= 1, insideRight = x < LPV_N - 1;  // neighbours at x − 1 (dir 0), x + 1 (dir 1)
   bool inside[6] = {true, true, y >= 1, y < LPV_N - 1, z >= 1, z < LPV_N - 1};
   const int stride[3] = {1, LPV_N, LPV_N * LPV_N};
+  floatL t[6][5];
+#pragma unroll
+  for (int dir = 0; dir < 6; ++dir) {
+    if (blocking && inside[dir]) {
+      // The shared face: the lower face along a of the cell itself (light along +a) or of the cell above.
+      global const float* face =
+          faceGeometry + LPV_PAD + LPV_PLANE(k, dir / 2, 0) + cell + (dir % 2 ? stride[dir / 2] : 0);
+      floatL g[4];
+#pragma unroll
+      for (int q = 0; q < 4; ++q) g[q] = vloadL(0, face + (size_t)q * LPV_STRIDE);
+      lpv_transmittance(dir, g, t[dir]);
+    } else {
+#pragma unroll
+      for (int f = 0; f < 5; ++f)
+        t[dir][f] = (floatL)((f == 0 ? LPV_MAIN_FACE_SOLID_ANGLE : LPV_SIDE_FACE_SOLID_ANGLE) * GI_INV_PI);
+    }
+  }
 #pragma unroll
   for (int ch = 0; ch < 3; ++ch) {
     size_t planes = LPV_PAD + LPV_PLANE(k, ch, 0);
@@ -399,18 +414,14 @@ kernel void lpv_propagate(global const float* src, global float* dst, global flo
     for (int dir = 0; dir < 6; ++dir) {
       if (!inside[dir]) continue;  // whole row outside (y, z neighbours)
       int nb = cell - (dir % 2 ? -1 : 1) * stride[dir / 2];  // x neighbours may be −1 or LPV_CELLS: padding, skew
-      floatL in[4], t[5];
+      floatL in[4];
 #pragma unroll
       for (int q = 0; q < 4; ++q) {
         in[q] = vloadL(0, src + planes + (size_t)q * LPV_STRIDE + nb);
         if (dir == 0) in[q] = select((floatL)(0.0f), in[q], insideLeft);
         if (dir == 1) in[q] = select((floatL)(0.0f), in[q], insideRight);
       }
-#pragma unroll
-      for (int f = 0; f < 5; ++f)
-        t[f] = blocking ? vloadL(0, tCell + LPV_T_PLANE(0, dir, f))
-                        : (floatL)((f == 0 ? LPV_MAIN_FACE_SOLID_ANGLE : LPV_SIDE_FACE_SOLID_ANGLE) * GI_INV_PI);
-      lpv_faces(dir, in, t, o);
+      lpv_faces(dir, in, t[dir], o);
     }
     const float lobe[4] = {GI_SH_LOBE0, GI_SH_LOBE1, GI_SH_LOBE1, GI_SH_LOBE1};
 #pragma unroll

@@ -119,7 +119,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   geometryCamera_ = program_.kernel("lpv_geometry_camera");
   resolveInjection_ = program_.kernel("lpv_resolve_injection");
   resolveGeometry_ = program_.kernel("lpv_resolve_geometry");
-  transmittanceKernel_ = program_.kernel("lpv_transmittance");
+  faceGeometryKernel_ = program_.kernel("lpv_face_geometry");
   propagate_ = program_.kernel("lpv_propagate");
   toLookupGrid_ = program_.kernel("lpv_lookup_grid");
   lookup_ = program_.kernel("lpv_lookup");
@@ -136,8 +136,9 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   ctx.fill(accumulated_, 0.0f);
   geometry_ = cl::Buffer(ctx, nodes * 16, CL_MEM_READ_WRITE, "lpv geometry volume");
   ctx.fill(geometry_, 0.0f);
-  transmittance_ = cl::Buffer(ctx, (kPad + planeStride() * 30 * cascades_) * sizeof(float), CL_MEM_READ_WRITE,
-                              "lpv face transmittances");
+  faceGeometry_ = cl::Buffer(ctx, (kPad + planeStride() * 12 * cascades_) * sizeof(float), CL_MEM_READ_WRITE,
+                             "lpv face blocking potential");
+  ctx.fill(faceGeometry_, 0.0f);  // padding and skew stay 0
   lookupGrid_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv lookup grid");
   // One row of cells per work-group: many groups, which PoCL spreads over the cores.
   propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * cascades_);
@@ -147,7 +148,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
 
 uint64_t LpvVolume::bytes() const {
   return layout_.bytes() + gridAcc_.bytes() + geometryAcc_.bytes() + grids_[0].bytes() + grids_[1].bytes() +
-         accumulated_.bytes() + geometry_.bytes() + transmittance_.bytes() + lookupGrid_.bytes() +
+         accumulated_.bytes() + geometry_.bytes() + faceGeometry_.bytes() + lookupGrid_.bytes() +
          (lookupImage_.get() ? lookupImage_.bytes() : 0);
 }
 
@@ -236,12 +237,12 @@ void LpvVolume::setGeometry(const std::vector<glm::vec4>& nodeValues) {
 
 void LpvVolume::propagate(int iterations, bool blocking) {
   if (blocking && iterations > 1) {
-    transmittanceKernel_.args(geometry_, transmittance_);
-    ctx_.launch(transmittanceKernel_, cl::NDRange::d3(cellsPerGrid(), 6, size_t(cascades_)), "lpv: propagate");
+    faceGeometryKernel_.args(geometry_, faceGeometry_);
+    ctx_.launch(faceGeometryKernel_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: propagate");
   }
   for (int i = 0; i < iterations; ++i) {
     // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
-    propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, transmittance_,
+    propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_,
                     int(blocking && i > 0));
     ctx_.launch(propagate_, propagateRange_, "lpv: propagate");
     current_ = 1 - current_;

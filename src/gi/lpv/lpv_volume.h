@@ -86,8 +86,8 @@ public:
   void addGeometryRsm(const GiView& view, const cl::Buffer& position, const cl::Buffer& normal, int res);
   void addGeometryCamera(const GBuffer& g);
   void resolve(bool geometry);  // sums -> float grids (the geometry volume only when asked)
-  // `iterations` gather steps; with `blocking`, first the per-face transmittances from the
-  // geometry volume (static over the steps), which block every step but the first.
+  // `iterations` gather steps; with `blocking`, first the blocking potential per cell face from
+  // the geometry volume (static over the steps), which blocks every step but the first.
   void propagate(int iterations, bool blocking);
   // Converts the accumulated grid into the lookup grid, then writes L = ρ/π · E per pixel.
   void lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out);
@@ -110,9 +110,9 @@ private:
   int n_, cascades_, vw_, lanes_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
   float injectionScale_ = 1.0f;
   cl::Program program_;
-  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, transmittanceKernel_, propagate_,
+  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, faceGeometryKernel_, propagate_,
       toLookupGrid_, lookup_;
-  cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, transmittance_, lookupGrid_;
+  cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, faceGeometry_, lookupGrid_;
   LpvImage lookupImage_;  // with LpvLookupStorage::Image: lookupGrid_'s copy the lookup samples
   cl::NDRange propagateRange_;
   int current_ = 0;
