@@ -4,6 +4,7 @@
 // igi 1×1 == vpl exactly, the discontinuity filter; the one-pixel-per-work-item path (GI_VW = 1).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -150,7 +151,7 @@ TEST(Igi, DeinterleaveThenReinterleaveIsIdentityForEveryPattern) {
     g.allocate(ctx, W, H);
     std::vector<glm::vec4> pos(size_t(W) * H), nrm(size_t(W) * H);
     for (size_t i = 0; i < pos.size(); ++i) {
-      pos[i] = glm::vec4(U(rng), U(rng), U(rng), 1.0f);
+      pos[i] = glm::vec4(U(rng), U(rng), U(rng), i % 5 == 3 ? 0.0f : 1.0f);  // every 5th: background
       nrm[i] = glm::vec4(U(rng), U(rng), U(rng), 0.0f);
     }
     ctx.write(g.position, pos.data(), pos.size() * 16);
@@ -166,12 +167,18 @@ TEST(Igi, DeinterleaveThenReinterleaveIsIdentityForEveryPattern) {
         std::vector<int> hits(L, 0);
         for (int y = 0; y < H; ++y)
           for (int x = 0; x < W; ++x) {
-            size_t o = packedIndex(x, y, n, m, ig.subWidth(), ig.stride());
+            size_t o = packedIndex(x, y, n, m, ig.subPitch(), ig.stride());
             ASSERT_LT(o, L);
             ASSERT_EQ(++hits[o], 1);
             ASSERT_EQ(planes[o], pos[size_t(y) * W + x].x);
-            ASSERT_EQ(planes[4 * L + o], nrm[size_t(y) * W + x].y);
+            bool surface = pos[size_t(y) * W + x].w > 0;
+            ASSERT_EQ(planes[4 * L + o], surface ? nrm[size_t(y) * W + x].y : 0.0f);  // background: E = 0
           }
+        // Slots without a pixel (padding of the sub-images) hold a zero normal: E = 0 there.
+        for (size_t o = 0; o < L; ++o)
+          if (!hits[o])
+            ASSERT_TRUE(planes[3 * L + o] == 0 && planes[4 * L + o] == 0 && planes[5 * L + o] == 0)
+                << n << "x" << m << " " << W << "x" << H << " slot " << o;
         ctx.copy(ig.planes(), ig.irradiance(), 3 * L * 4);  // x, y, z planes as "irradiance"
         ig.reinterleaveIrradiance(out);
         auto back = download<glm::vec4>(ctx, out);
@@ -274,5 +281,108 @@ TEST(Igi, DiscontinuityFilterMatchesHost) {
           ASSERT_NEAR(L[p][c], expected[c], 1e-5f) << fx << "x" << fy << " pixel " << x << "," << y;
       }
   }
+  ctx.profiler().discard();
+}
+
+// The geometry-aware upsampler (ALGORITHMS.md §3; shared by rsm, second-order, vct, probes)
+// against a host mirror of its formula: 2×2 bilinear taps at the low-resolution pixels' guide
+// pixels (u·f, v·f), kept by the depth/normal test, renormalised, nearest tap when none passes,
+// L = ρ/π · max(0, E). Real G-buffer discontinuities (Cornell box with blocks), odd sizes,
+// random E with negative values (second-order's net irradiance can be negative).
+TEST(Igi, GeometryAwareUpsamplerMatchesHost) {
+  cl::Context& ctx = test::context();
+  CornellOptions o;
+  o.withAreaLight = false;
+  o.spotLight = CornellSpotLight{};
+  Scene s = makeCornellBox(o);
+  const int W = 37, H = 31;
+  Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=4"}));
+  r.renderFrame();
+  const GBuffer& g = r.gbuffer();
+  auto depth = download<float>(ctx, g.visibility.depth);
+  auto gn = download<glm::vec4>(ctx, g.geoNormal), alb = download<glm::vec4>(ctx, g.albedo);
+  auto inst = download<uint32_t>(ctx, g.instance);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(-0.2f, 1.0f);
+  GeometryAwareUpsampler upsampler(ctx, "test upsample");
+  GeometryTest t;
+  float cosN = std::cos(t.tauNDegrees * 3.14159265f / 180.0f);
+  cl::Buffer out(ctx, size_t(W) * H * 16);
+  for (int f : {2, 3}) {
+    int lw = (W + f - 1) / f, lh = (H + f - 1) / f;
+    std::vector<glm::vec4> E(size_t(lw) * lh);
+    for (auto& e : E) e = glm::vec4(U(rng), U(rng), U(rng), 0.0f);
+    cl::Buffer eb = ctx.upload(E, "low E");
+    upsampler.run(g, eb, f, t, out);
+    auto L = download<glm::vec4>(ctx, out);
+    int accepted = 0, rejected = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        size_t p = size_t(y) * W + x;
+        glm::vec3 expected(0.0f);
+        if (inst[p] != GI_INVALID_ID) {
+          float fx = (float(x) + 0.5f) / float(f) - 0.5f, fy = (float(y) + 0.5f) / float(f) - 0.5f;
+          int u0 = std::clamp(int(std::floor(fx)), 0, lw - 1), v0 = std::clamp(int(std::floor(fy)), 0, lh - 1);
+          float ax = std::clamp(fx - float(u0), 0.0f, 1.0f), ay = std::clamp(fy - float(v0), 0.0f, 1.0f);
+          glm::vec3 sum(0.0f);
+          float wsum = 0;
+          for (int j = 0; j < 2; ++j)
+            for (int k = 0; k < 2; ++k) {
+              int u = std::min(u0 + k, lw - 1), v = std::min(v0 + j, lh - 1);
+              size_t q = size_t(std::min(v * f, H - 1)) * W + std::min(u * f, W - 1);
+              float w = (k ? ax : 1.0f - ax) * (j ? ay : 1.0f - ay) + 1e-4f;
+              bool ok = inst[q] != GI_INVALID_ID && std::abs(depth[q] - depth[p]) <= t.tauZ * depth[p] &&
+                        glm::dot(glm::vec3(gn[q]), glm::vec3(gn[p])) >= cosN;
+              (ok ? accepted : rejected)++;
+              if (ok) {
+                sum += w * glm::vec3(E[size_t(v) * lw + u]);
+                wsum += w;
+              }
+            }
+          int un = std::clamp(int(std::floor(fx + 0.5f)), 0, lw - 1), vn = std::clamp(int(std::floor(fy + 0.5f)), 0, lh - 1);
+          glm::vec3 e = wsum > 0 ? sum / wsum : glm::vec3(E[size_t(vn) * lw + un]);
+          expected = glm::vec3(alb[p]) * glm::max(e, glm::vec3(0.0f)) * 0.31830988618379067154f;
+        }
+        for (int c = 0; c < 3; ++c)
+          ASSERT_NEAR(L[p][c], expected[c], 1e-5f) << "factor " << f << " pixel " << x << "," << y;
+      }
+    EXPECT_GT(rejected, W * H / 50) << "factor " << f << ": the test must exercise rejected taps";
+    EXPECT_GT(accepted, W * H) << "factor " << f;
+  }
+  ctx.profiler().discard();
+}
+
+// The fused gather (vpl_gather_camera, used by `vpl` and `igi`) computes exactly what
+// de-interleave + vpl_gather + re-interleave compute, for radiance and irradiance, for square and
+// non-square patterns on an odd image (the sub-images' padding lanes must stay unwritten).
+TEST(Igi, FusedGatherEqualsDeinterleaveShadeReinterleave) {
+  cl::Context& ctx = test::context();
+  Scene s = emptyCornellWithSpot();
+  const int W = 37, H = 23;
+  Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=4"}));
+  r.renderFrame();
+  VplGenerator gen(ctx);
+  VplSet v;
+  gen.generate(r.rsms(), 70, 0.0f, v);
+  InterleavedGather ig(ctx, "test");
+  const glm::vec4 sentinel(-7.0f);
+  std::vector<glm::vec4> init(size_t(W) * H, sentinel);
+  for (auto [n, m] : {std::pair{1, 1}, std::pair{3, 2}, std::pair{4, 4}, std::pair{8, 5}})
+    for (bool radiance : {false, true}) {
+      ig.resize(W, H, n, m);
+      cl::Buffer copies(ctx, size_t(W) * H * 16), fused = ctx.upload(init, "fused out");
+      ig.deinterleave(r.gbuffer());
+      ig.shade(v);
+      if (radiance) ig.reinterleaveRadiance(r.gbuffer(), copies);
+      else ig.reinterleaveIrradiance(copies);
+      ig.shadeCameraOrder(r.gbuffer(), v, nullptr, radiance, fused);
+      auto a = download<glm::vec4>(ctx, copies), b = download<glm::vec4>(ctx, fused);
+      int lit = 0;
+      for (size_t p = 0; p < a.size(); ++p) {
+        ASSERT_EQ(a[p], b[p]) << n << "x" << m << (radiance ? " radiance" : " irradiance") << " pixel " << p;
+        lit += a[p].y > 0;
+      }
+      EXPECT_GT(lit, W * H / 3);
+    }
   ctx.profiler().discard();
 }

@@ -157,44 +157,97 @@ kernel void discontinuity_filter(int width, int height, global const float* plan
 // that pixel's depth and geometric normal). Each full-resolution pixel takes the 2×2 nearest
 // low-resolution pixels with bilinear weights, keeps those passing the §3 test against its own
 // depth and normal, renormalises; if none passes it takes the nearest one. Output L = ρ/π · max(0, E).
+//
+// GI_VW adjacent pixels of a row per work-item: the row's own values are vector loads, the four
+// taps per-lane loads (one 128-bit load per float4 record); the vertical tap rows and weights are
+// shared by the lanes.
 #ifndef GI_UP
 #define GI_UP 2
 #endif
 kernel void geometry_aware_upsample(int width, int height, int lowWidth, int lowHeight,
-                                    global const float4* lowIrradiance, global const float* depth,
-                                    global const float4* geoNormal, global const uint* instance,
-                                    global const float4* albedo, float tauZ, float cosTauN,
-                                    global float4* out) {
-  int x = get_global_id(0), y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  size_t i = (size_t)y * width + x;
-  if (instance[i] == GI_INVALID_ID) {
-    out[i] = (float4)(0.0f);
-    return;
+                                    global const float* lowIrradiance, global const float* depth,
+                                    global const float* geoNormal, global const uint* instance,
+                                    global const float* albedo, float tauZ, float cosTauN,
+                                    global float* out) {
+  int gx = get_global_id(0), y = get_global_id(1);
+  int x0 = gx * GI_VW;
+  if (x0 >= width || y >= height) return;
+  intV x = x0 + GI_LANES;
+  bool whole = x0 + GI_VW <= width;  // every lane is a pixel: contiguous loads and stores
+  size_t row = (size_t)y * width;
+  intV own = (int)row + min(x, width - 1);
+  floatV z, nx, ny, nz, unused, ar, ag, ab;
+  uintV id;
+  if (whole) {
+    z = vloadV(0, depth + row + x0);
+    id = vloadV(0, instance + row + x0);
+    GI_AOS4_LOAD(geoNormal + 4 * (row + x0), nx, ny, nz, unused)
+    GI_AOS4_LOAD(albedo + 4 * (row + x0), ar, ag, ab, unused)
+  } else {
+    z = GI_GATHER(floatV, depth, own);
+    id = GI_GATHER(uintV, instance, own);
+    GI_GATHER_AOS4(float, geoNormal, own, nx, ny, nz, unused)
+    GI_GATHER_AOS4(float, albedo, own, ar, ag, ab, unused)
   }
-  float z = depth[i];
-  float3 n = geoNormal[i].xyz;
-  float fx = ((float)x + 0.5f) / (float)GI_UP - 0.5f, fy = ((float)y + 0.5f) / (float)GI_UP - 0.5f;
-  int u0 = clamp((int)floor(fx), 0, lowWidth - 1), v0 = clamp((int)floor(fy), 0, lowHeight - 1);
-  float ax = clamp(fx - (float)u0, 0.0f, 1.0f), ay = clamp(fy - (float)v0, 0.0f, 1.0f);
-  float3 sum = (float3)(0.0f);
-  float wsum = 0.0f;
+  floatV fx = (convert_floatV(x) + 0.5f) / (float)GI_UP - 0.5f;
+  float fy = ((float)y + 0.5f) / (float)GI_UP - 0.5f;
+  intV u0 = clamp(convert_intV(floor(fx)), 0, lowWidth - 1);
+  int v0 = clamp((int)floor(fy), 0, lowHeight - 1);
+  floatV ax = clamp(fx - convert_floatV(u0), 0.0f, 1.0f);
+  float ay = clamp(fy - (float)v0, 0.0f, 1.0f);
+  floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), wsum = (floatV)(0.0f);
+  floatV tz = tauZ * z;
 #pragma unroll
   for (int j = 0; j < 2; ++j) {
+    int v = min(v0 + j, lowHeight - 1);
+    int guideRow = min(v * GI_UP, height - 1) * width;
+    float wy = j ? ay : 1.0f - ay;
 #pragma unroll
     for (int k = 0; k < 2; ++k) {
-      int u = min(u0 + k, lowWidth - 1), v = min(v0 + j, lowHeight - 1);
-      size_t q = (size_t)min(v * GI_UP, height - 1) * width + min(u * GI_UP, width - 1);
-      float w = (k ? ax : 1.0f - ax) * (j ? ay : 1.0f - ay) + 1e-4f;
-      bool ok = instance[q] != GI_INVALID_ID && fabs(depth[q] - z) <= tauZ * z && dot(geoNormal[q].xyz, n) >= cosTauN;
-      if (ok) {
-        sum += w * lowIrradiance[(size_t)v * lowWidth + u].xyz;
-        wsum += w;
-      }
+      intV u = min(u0 + k, lowWidth - 1);
+      intV q = guideRow + min(u * GI_UP, width - 1);
+      floatV w = (k ? ax : 1.0f - ax) * wy + 1e-4f;
+      floatV qz = GI_GATHER(floatV, depth, q);
+      uintV qid = GI_GATHER(uintV, instance, q);
+      floatV qnx, qny, qnz, er, eg, eb;
+      GI_GATHER_AOS4(float, geoNormal, q, qnx, qny, qnz, unused)
+      GI_GATHER_AOS4(float, lowIrradiance, v * lowWidth + u, er, eg, eb, unused)
+#if GI_VW == 1
+      bool ok = qid != GI_INVALID_ID && fabs(qz - z) <= tz && qnx * nx + qny * ny + qnz * nz >= cosTauN;
+#else
+      intV ok = (qid != GI_INVALID_ID) & (fabs(qz - z) <= tz) & (qnx * nx + qny * ny + qnz * nz >= cosTauN);
+#endif
+      w = GI_SEL((floatV)(0.0f), w, ok);
+      sr += w * er;
+      sg += w * eg;
+      sb += w * eb;
+      wsum += w;
     }
   }
-  int un = clamp((int)floor(fx + 0.5f), 0, lowWidth - 1), vn = clamp((int)floor(fy + 0.5f), 0, lowHeight - 1);
-  float3 e = wsum > 0.0f ? sum / wsum : lowIrradiance[(size_t)vn * lowWidth + un].xyz;
+  // No tap accepted: the nearest low-resolution pixel.
+  intV un = clamp(convert_intV(floor(fx + 0.5f)), 0, lowWidth - 1);
+  int vn = clamp((int)floor(fy + 0.5f), 0, lowHeight - 1);
+  floatV nr, ng, nb;
+  GI_GATHER_AOS4(float, lowIrradiance, vn * lowWidth + un, nr, ng, nb, unused)
+  intV accepted = wsum > 0.0f;
+  floatV wdiv = GI_SEL((floatV)(1.0f), wsum, accepted);
   // Irradiance is never negative; second-order's net E_s − E_n can be (ALGORITHMS.md §2.6).
-  out[i] = (float4)(albedo[i].xyz * (max(e, 0.0f) * GI_INV_PI), 0.0f);
+  floatV zero = (floatV)(0.0f);
+  intV surface = id != GI_INVALID_ID;
+  floatV lr = GI_SEL(zero, ar * (max(GI_SEL(nr, sr / wdiv, accepted), 0.0f) * GI_INV_PI), surface);
+  floatV lg = GI_SEL(zero, ag * (max(GI_SEL(ng, sg / wdiv, accepted), 0.0f) * GI_INV_PI), surface);
+  floatV lb = GI_SEL(zero, ab * (max(GI_SEL(nb, sb / wdiv, accepted), 0.0f) * GI_INV_PI), surface);
+  if (whole) {
+    GI_AOS4_STORE(out + 4 * (row + x0), lr, lg, lb, zero)
+  } else {
+#if GI_VW == 1
+    vstore4((float4)(lr, lg, lb, 0.0f), row + x0, out);
+#else
+    float v[3][GI_VW];
+    vstoreV(lr, 0, v[0]);
+    vstoreV(lg, 0, v[1]);
+    vstoreV(lb, 0, v[2]);
+    for (int l = 0; x0 + l < width; ++l) vstore4((float4)(v[0][l], v[1][l], v[2][l], 0.0f), row + x0 + l, out);
+#endif
+  }
 }

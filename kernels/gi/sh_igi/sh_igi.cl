@@ -105,7 +105,8 @@ kernel void sh_igi_project(int width, int height, int n, int m, int subWidth, in
   if (!sh_row(get_global_id(0), columns, width, height, n, m, &r)) return;
   int sets = n * m, set = r.c;
   size_t L = (size_t)sets * stride;  // receivers: InterleavedGather's six planes of L slots
-  size_t slot = (size_t)r.c * stride + (size_t)r.sy * subWidth + r.sx0;
+  // InterleavedGather's sub-image rows are stride / subHeight slots apart (subWidth rounded up to 16).
+  size_t slot = (size_t)r.c * stride + (size_t)r.sy * (stride / subHeight) + r.sx0;
   int lanes = min(GI_VW, subWidth - r.sx0);
   floatV px, py, pz, nx, ny, nz;
   if (lanes == GI_VW) {

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "cl/gather_width.h"
+
 namespace gi {
 
 void DiscontinuityFilter::run(const GBuffer& g, const cl::Buffer& irradiance, int fx, int fy, const GeometryTest& t,
@@ -37,7 +39,8 @@ void GeometryAwareUpsampler::run(const GBuffer& g, const cl::Buffer& lowIrradian
                                  cl::Buffer& out) {
   auto it = kernels_.find(factor);
   if (it == kernels_.end()) {
-    cl::Program p = ctx_.buildProgram("kernels/gi/filters/discontinuity.cl", {{"GI_UP", std::to_string(factor)}});
+    cl::Program p = ctx_.buildProgram("kernels/gi/filters/discontinuity.cl",
+                                      cl::withGatherWidth(ctx_, {{"GI_UP", std::to_string(factor)}}));
     cl::Kernel k = p.kernel("geometry_aware_upsample");
     it = kernels_.emplace(factor, std::make_pair(std::move(p), std::move(k))).first;
   }
@@ -46,7 +49,10 @@ void GeometryAwareUpsampler::run(const GBuffer& g, const cl::Buffer& lowIrradian
   float cosTauN = std::cos(t.tauNDegrees * 3.14159265f / 180.0f);
   k.args(g.width, g.height, lw, lh, lowIrradiance, g.visibility.depth, g.geoNormal, g.instance, g.albedo, t.tauZ,
          cosTauN, out);
-  ctx_.launch(k, cl::NDRange::d2(cl::roundUp(g.width, 16), cl::roundUp(g.height, 16), 16, 16), label_);
+  int vw = cl::gatherVectorWidth(ctx_);
+  size_t gx = (size_t(g.width) + vw - 1) / vw;
+  if (vw == 1) ctx_.launch(k, cl::NDRange::d2(cl::roundUp(gx, 16), cl::roundUp(g.height, 16), 16, 16), label_);
+  else ctx_.launch(k, cl::NDRange::d2(gx, cl::roundUp(g.height, 8), 1, 8), label_);
 }
 
 }  // namespace gi

@@ -206,38 +206,55 @@ InterleavedGather::InterleavedGather(cl::Context& ctx, std::string prefix) : ctx
   gather_ = program_.kernel("vpl_gather");
   reRadiance_ = program_.kernel("gi_reinterleave_radiance");
   reIrradiance_ = program_.kernel("gi_reinterleave_irradiance");
+  gatherCamera_ = program_.kernel("vpl_gather_camera");
 }
 
 void InterleavedGather::resize(int width, int height, int n, int m) {
   if (n < 1 || n > 8 || m < 1 || m > 8) throw Error("interleave pattern " + std::to_string(n) + "x" + std::to_string(m) + " outside 1x1..8x8");
-  if (width == width_ && height == height_ && n == n_ && m == m_ && planes_) return;
+  if (width == width_ && height == height_ && n == n_ && m == m_) return;
   width_ = width;
   height_ = height;
   n_ = n;
   m_ = m;
   subW_ = (width + n - 1) / n;
   subH_ = (height + m - 1) / m;
-  stride_ = int(cl::roundUp(size_t(subW_) * subH_, size_t(ctx_.vectorWidth())));
+  subPitch_ = int(cl::roundUp(size_t(subW_), 16));  // whole 16-slot runs per row (vpl_gather.cl copies)
+  stride_ = subPitch_ * subH_;
+  planes_ = cl::Buffer();
+  irradiance_ = cl::Buffer();
+}
+
+void InterleavedGather::allocatePlanes() {
+  if (planes_) return;
   planes_ = cl::Buffer(ctx_, slots() * 6 * 4, CL_MEM_READ_WRITE, prefix_ + " G-buffer sub-images");
   irradiance_ = cl::Buffer(ctx_, slots() * 3 * 4, CL_MEM_READ_WRITE, prefix_ + " sub-image irradiance");
-  ctx_.fill(planes_, 0.0f);  // slots without a pixel keep a zero normal: E = 0 there
   ctx_.fill(irradiance_, 0.0f);
 }
 
+// The copies' work-items (vpl_gather.cl): dimension 0 = class column + n · (run of GI_VW slots of
+// a sub-image row), dimension 1 = camera row, m·⌈H/m⌉ of them (the rows past H write empty slots).
+// A work-group covers several runs of all n class columns of a few rows.
+cl::NDRange InterleavedGather::copyRange() const {
+  size_t vw = size_t(ctx_.vectorWidth());
+  size_t runs = size_t(subPitch_) / vw;  // a multiple of 16 / vw
+  size_t perGroup = 1;
+  while (perGroup < 8 && runs % (perGroup * 2) == 0) perGroup *= 2;
+  size_t rows = std::max<size_t>(1, 16 / perGroup);
+  return cl::NDRange::d2(size_t(n_) * runs, cl::roundUp(size_t(m_) * subH_, rows), size_t(n_) * perGroup, rows);
+}
+
 void InterleavedGather::deinterleave(const GBuffer& g, bool geometricNormal) {
-  deinterleave_.args(width_, height_, n_, m_, subW_, stride_, g.position, geometricNormal ? g.geoNormal : g.normal,
+  allocatePlanes();
+  deinterleave_.args(width_, height_, n_, m_, subPitch_, stride_, g.position, geometricNormal ? g.geoNormal : g.normal,
                      planes_);
-  ctx_.launch(deinterleave_, cl::NDRange::d2(cl::roundUp(width_, 16), cl::roundUp(height_, 16), 16, 16),
-              prefix_ + ": de-interleave");
+  ctx_.launch(deinterleave_, copyRange(), prefix_ + ": de-interleave");
 }
 
 void InterleavedGather::shade(const VplSet& v, const VplVisibility* visibility) {
+  allocatePlanes();
   int sets = n_ * m_;
   bool rays = visibility && visibility->enabled();
-  if (rays && !visibleGather_.get()) {
-    visibleProgram_ = ctx_.buildProgram("kernels/gi/vpl/vpl_gather.cl", visibility->defines());
-    visibleGather_ = visibleProgram_.kernel("vpl_gather");
-  }
+  if (rays) buildVisibilityProgram(*visibility);
   cl::Kernel& gather = rays ? visibleGather_ : gather_;
   gather.args(planes_, sets, stride_, v.vpls, v.count, irradiance_);
   if (rays) visibility->setArgs(gather, 6);
@@ -246,16 +263,32 @@ void InterleavedGather::shade(const VplSet& v, const VplVisibility* visibility) 
   ctx_.launch(gather, cl::NDRange::d1(cl::roundUp(items, local), local), prefix_ + (rays ? ": shade + rays" : ": shade"));
 }
 
+void InterleavedGather::buildVisibilityProgram(const VplVisibility& visibility) {
+  if (visibleGather_.get()) return;
+  visibleProgram_ = ctx_.buildProgram("kernels/gi/vpl/vpl_gather.cl", visibility.defines());
+  visibleGather_ = visibleProgram_.kernel("vpl_gather");
+  visibleGatherCamera_ = visibleProgram_.kernel("vpl_gather_camera");
+}
+
+void InterleavedGather::shadeCameraOrder(const GBuffer& g, const VplSet& v, const VplVisibility* visibility,
+                                         bool radiance, cl::Buffer& out) {
+  bool rays = visibility && visibility->enabled();
+  if (rays) buildVisibilityProgram(*visibility);
+  cl::Kernel& k = rays ? visibleGatherCamera_ : gatherCamera_;
+  k.args(width_, height_, n_, m_, subPitch_, stride_, g.position, g.normal, v.vpls, v.count, int(radiance), g.albedo,
+         out);
+  if (rays) visibility->setArgs(k, 12);
+  ctx_.launch(k, copyRange(), prefix_ + (rays ? ": shade from G-buffer + rays" : ": shade from G-buffer"));
+}
+
 void InterleavedGather::reinterleaveRadiance(const GBuffer& g, cl::Buffer& out) {
-  reRadiance_.args(width_, height_, n_, m_, subW_, stride_, irradiance_, g.albedo, out);
-  ctx_.launch(reRadiance_, cl::NDRange::d2(cl::roundUp(width_, 16), cl::roundUp(height_, 16), 16, 16),
-              prefix_ + ": re-interleave");
+  reRadiance_.args(width_, height_, n_, m_, subPitch_, stride_, irradiance_, g.albedo, out);
+  ctx_.launch(reRadiance_, copyRange(), prefix_ + ": re-interleave");
 }
 
 void InterleavedGather::reinterleaveIrradiance(cl::Buffer& out) {
-  reIrradiance_.args(width_, height_, n_, m_, subW_, stride_, irradiance_, out);
-  ctx_.launch(reIrradiance_, cl::NDRange::d2(cl::roundUp(width_, 16), cl::roundUp(height_, 16), 16, 16),
-              prefix_ + ": re-interleave");
+  reIrradiance_.args(width_, height_, n_, m_, subPitch_, stride_, irradiance_, out);
+  ctx_.launch(reIrradiance_, copyRange(), prefix_ + ": re-interleave");
 }
 
 }  // namespace gi

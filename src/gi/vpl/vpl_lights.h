@@ -72,7 +72,7 @@ glm::vec3 hostIrradiance(const std::vector<HostVpl>& vpls, glm::vec3 x, glm::vec
 
 // The interleaved gather: de-interleave the G-buffer into n·m sub-images (SoA planes), shade
 // each with VPL set c (VPL k -> set k mod n·m, weights × n·m), re-interleave. n = m = 1 is the
-// plain all-pairs gather.
+// plain all-pairs gather. shadeCameraOrder() does the three steps in one pass.
 class InterleavedGather {
 public:
   // `prefix` names the launches: "<prefix>: de-interleave", "<prefix>: shade", "<prefix>: re-interleave".
@@ -85,12 +85,18 @@ public:
   void shade(const VplSet& vpls, const VplVisibility* visibility = nullptr);
   void reinterleaveRadiance(const GBuffer& g, cl::Buffer& out);  // L = ρ/π · E
   void reinterleaveIrradiance(cl::Buffer& out);                    // E, float4 per pixel
+  // De-interleave (shading normals) + shade + re-interleave as one kernel ("<prefix>: shade from
+  // G-buffer"): each work-item reads its sub-image run straight from the G-buffer and writes camera
+  // order, E (radiance false) or L = ρ/π · E. Same values; planes() and irradiance() are not written.
+  void shadeCameraOrder(const GBuffer& g, const VplSet& vpls, const VplVisibility* visibility, bool radiance,
+                        cl::Buffer& out);
 
   int n() const { return n_; }
   int m() const { return m_; }
-  int subWidth() const { return subW_; }
-  int subHeight() const { return subH_; }
-  int stride() const { return stride_; }  // slots per sub-image (multiple of GI_VW)
+  int subWidth() const { return subW_; }    // ⌈W/n⌉ pixels
+  int subHeight() const { return subH_; }   // ⌈H/m⌉ pixels
+  int subPitch() const { return subPitch_; }  // slots per sub-image row: subWidth rounded up to 16
+  int stride() const { return stride_; }    // slots per sub-image: subPitch · subHeight
   size_t slots() const { return size_t(n_) * m_ * stride_; }
   const cl::Buffer& planes() const { return planes_; }          // 6 planes: x, y, z, nx, ny, nz
   const cl::Buffer& irradiance() const { return irradiance_; }  // 3 planes: E r, g, b
@@ -99,17 +105,20 @@ private:
   cl::Context& ctx_;
   std::string prefix_;
   cl::Program program_;
-  cl::Kernel deinterleave_, gather_, reRadiance_, reIrradiance_;
-  cl::Program visibleProgram_;  // built on the first shade() with visibility
-  cl::Kernel visibleGather_;
+  cl::Kernel deinterleave_, gather_, reRadiance_, reIrradiance_, gatherCamera_;
+  cl::Program visibleProgram_;  // built on the first shade with visibility
+  cl::Kernel visibleGather_, visibleGatherCamera_;
   cl::Buffer planes_, irradiance_;
-  int width_ = 0, height_ = 0, n_ = 0, m_ = 0, subW_ = 0, subH_ = 0, stride_ = 0;
+  cl::NDRange copyRange() const;
+  void allocatePlanes();  // on the first use of the copies (the fused path needs no planes)
+  void buildVisibilityProgram(const VplVisibility& visibility);
+  int width_ = 0, height_ = 0, n_ = 0, m_ = 0, subW_ = 0, subH_ = 0, subPitch_ = 0, stride_ = 0;
 };
 
 // Host mirror of the packed index (tests).
-inline size_t packedIndex(int x, int y, int n, int m, int subWidth, int stride) {
+inline size_t packedIndex(int x, int y, int n, int m, int subPitch, int stride) {
   int c = (x % n) + n * (y % m);
-  return size_t(c) * stride + size_t(y / m) * subWidth + size_t(x / n);
+  return size_t(c) * stride + size_t(y / m) * subPitch + size_t(x / n);
 }
 
 }  // namespace gi

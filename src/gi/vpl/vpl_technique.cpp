@@ -28,9 +28,7 @@ public:
       return;
     }
     gather_->resize(f.gbuffer.width, f.gbuffer.height, 1, 1);
-    gather_->deinterleave(f.gbuffer);
-    gather_->shade(vpls_, &visibility_);
-    gather_->reinterleaveRadiance(f.gbuffer, indirect);
+    gather_->shadeCameraOrder(f.gbuffer, vpls_, &visibility_, true, indirect);
   }
 
 private:
@@ -84,9 +82,7 @@ public:
     if (!irradiance_ || irradiance_.bytes() != bytes)
       irradiance_ = cl::Buffer(f.ctx, bytes, CL_MEM_READ_WRITE, "igi irradiance");
     visibility_.update(f);
-    gather_->deinterleave(f.gbuffer);
-    gather_->shade(vpls_, &visibility_);
-    gather_->reinterleaveIrradiance(irradiance_);
+    gather_->shadeCameraOrder(f.gbuffer, vpls_, &visibility_, false, irradiance_);
     GeometryTest t;
     t.tauZ = p.getFloat("igi.tau_z");
     t.tauNDegrees = p.getFloat("igi.tau_n");
