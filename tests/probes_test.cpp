@@ -8,6 +8,8 @@
 //   - builtin:thin_wall: probes in the lit room do not light the dark room through the wall
 //     (Chebyshev visibility: below 1.5 % of the lit room), and without the visibility term they
 //     do (more than 3 × as much: the test can fail);
+//   - relocation: a probe inside a closed box moves out and then sees light (without relocation
+//     it stays dark); one that cannot leave its cell is switched off;
 //   - the lane-wise shading kernel equals the scalar probe_field_irradiance() the probe rays use;
 //   - a uniform field shades every pixel with exactly ρ/π · E; frames are bit-identical.
 #include <gtest/gtest.h>
@@ -25,6 +27,7 @@
 #include "render/renderer.h"
 #include "render/views.h"
 #include "scene/thin_wall.h"
+#include "scene_builders.h"
 #include "test_support.h"
 
 using namespace gi;
@@ -307,10 +310,79 @@ TEST(ProbeAccuracy, ThinWallProbeDoesNotLightTheOtherSide) {
   std::printf("thin wall: room B / room A indirect = %.3f %% with Chebyshev visibility, %.2f %% without "
               "(room A %.5f)\n", 100.0 * with.roomB / with.roomA, 100.0 * without.roomB / without.roomA, with.roomA);
   EXPECT_GT(with.roomA, 0.0);
-  // Measured 0.82 % with visibility (the rest: the 2 cm wall is within the filtered distance's
-  // blur and the self-shadow bias) and 4.9 % without.
+  // Measured 0.97 % with visibility (the rest: the 2 cm wall is within the filtered distance's
+  // blur and the self-shadow bias) and 6.9 % without.
   EXPECT_LT(with.roomB, 0.015 * with.roomA);
   EXPECT_GT(without.roomB, 3.0 * with.roomB);  // the scene does test the visibility term
+}
+
+namespace {
+
+// A 4 × 4 m floor (y = 0) and ceiling (y = 2) facing each other, and a closed box with outward
+// faces and the given half extents around (0, 1, 0): the centre of the bounds, where a 1×1×1 grid
+// puts its probe. A point light in a corner.
+Scene closedBoxScene(glm::vec3 half) {
+  Scene s;
+  s.name = "closed box";
+  s.materials.push_back(diffuseMaterial(glm::vec3(0.6f)));
+  addQuad(s, {-2, 0, 2}, {4, 0, 0}, {0, 0, -4}, 0);  // floor, faces +y
+  addQuad(s, {-2, 2, -2}, {4, 0, 0}, {0, 0, 4}, 0);  // ceiling, faces -y
+  glm::vec3 lo = glm::vec3(0, 1, 0) - half, e = 2.0f * half;
+  addQuad(s, lo, {0, 0, e.z}, {0, e.y, 0}, 0);                          // -x
+  addQuad(s, lo + glm::vec3(e.x, 0, 0), {0, e.y, 0}, {0, 0, e.z}, 0);  // +x
+  addQuad(s, lo, {e.x, 0, 0}, {0, 0, e.z}, 0);                          // -y
+  addQuad(s, lo + glm::vec3(0, e.y, 0), {0, 0, e.z}, {e.x, 0, 0}, 0);  // +y
+  addQuad(s, lo, {0, e.y, 0}, {e.x, 0, 0}, 0);                          // -z
+  addQuad(s, lo + glm::vec3(0, 0, e.z), {e.x, 0, 0}, {0, e.y, 0}, 0);  // +z
+  s.computeBounds();
+  s.lights.push_back(pointLight({1.5f, 1.8f, 1.5f}, glm::vec3(5.0f)));
+  return s;
+}
+
+struct RelocatedProbe {
+  glm::vec4 state;   // offset from the grid point, active flag
+  double irradiance;  // mean over the map's texels and channels
+};
+
+RelocatedProbe relocateAndUpdate(const Scene& s, bool relocate) {
+  ProbeSettings ps;
+  ps.counts = glm::ivec3(1);
+  ps.relocate = relocate;
+  DeviceScene ds(context(), s);
+  ProbeField field(context(), s, ds, ps);
+  field.relocate(ds, 4);
+  for (int i = 0; i < 4; ++i) field.update(ds, 1.0f, false);
+  std::vector<glm::vec4> irr = context().download<glm::vec4>(field.irradiance());
+  double sum = 0;
+  for (const glm::vec4& t : irr) sum += double(t.x + t.y + t.z) / 3.0;
+  return {context().download<glm::vec4>(field.states())[0], sum / double(irr.size())};
+}
+
+}  // namespace
+
+TEST(ProbeRelocation, ProbeInsideGeometryMovesOutOrIsSwitchedOff) {
+  // Box of half size 0.3 m around the probe: every ray hits a back face, so the probe moves out
+  // through the nearest face to the minimum front-face distance (0.1 × 2 m spacing = 0.2 m).
+  Scene small = closedBoxScene(glm::vec3(0.3f));
+  RelocatedProbe moved = relocateAndUpdate(small, true), kept = relocateAndUpdate(small, false);
+  glm::vec3 off(moved.state);
+  float outside = std::max({std::fabs(off.x), std::fabs(off.y), std::fabs(off.z)}) - 0.3f;
+  std::printf("probe in a closed box: moved by (%.3f, %.3f, %.3f) m, %.3f m outside the box, active %.0f, mean "
+              "irradiance %.4f (without relocation: %.4f, active %.0f)\n", off.x, off.y, off.z, outside,
+              moved.state.w, moved.irradiance, kept.irradiance, kept.state.w);
+  EXPECT_EQ(moved.state.w, 1.0f);
+  EXPECT_GE(outside, 0.1f);  // at least half the minimum front-face distance
+  EXPECT_GT(moved.irradiance, 0.0);
+  EXPECT_EQ(kept.irradiance, 0.0);  // inside, it sees only the unlit insides of the box
+  EXPECT_EQ(kept.state, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+
+  // Box of half height 0.75 m: leaving through the top or bottom needs 0.95 m, more than the
+  // 0.45 × 2 m the probe may move along y; the sides are farther. It stays and is switched off.
+  RelocatedProbe stuck = relocateAndUpdate(closedBoxScene(glm::vec3(1.9f, 0.75f, 1.9f)), true);
+  std::printf("probe in a box it cannot leave: offset (%.3f, %.3f, %.3f), active %.0f\n", stuck.state.x,
+              stuck.state.y, stuck.state.z, stuck.state.w);
+  EXPECT_EQ(stuck.state.w, 0.0f);
+  EXPECT_EQ(glm::vec3(stuck.state), glm::vec3(0.0f));
 }
 
 namespace {
@@ -370,6 +442,7 @@ TEST(ProbeKernels, LaneWiseShadingEqualsScalarFunction) {
   ps.counts = glm::ivec3(3, 2, 2);
   ps.rays = 64;
   ProbeField field(context(), s, r.deviceScene(), ps);
+  field.relocate(r.deviceScene(), 2);  // probes off their grid points
   for (int i = 0; i < 4; ++i) field.update(r.deviceScene(), 1.0f);
   const GBuffer& g = r.gbuffer();
   size_t n = size_t(g.width) * g.height;
@@ -377,7 +450,8 @@ TEST(ProbeKernels, LaneWiseShadingEqualsScalarFunction) {
   field.shade(g, lanes);
   cl::Program prog = context().buildProgram("kernels/gi/probes/probe_test_kernels.cl");
   cl::Kernel k = prog.kernel("probe_shade_scalar");
-  k.args(field.grid(), field.irradiance(), field.distance(), g.view, g.position, g.geoNormal, g.normal, g.albedo, scalar);
+  k.args(field.grid(), field.irradiance(), field.distance(), field.states(), g.view, g.position, g.geoNormal, g.normal,
+         g.albedo, scalar);
   context().launch(k, cl::NDRange::d2(cl::roundUp(g.width, 8), cl::roundUp(g.height, 8), 8, 8));
   std::vector<glm::vec4> a = context().download<glm::vec4>(lanes), b = context().download<glm::vec4>(scalar);
   double maxDiff = 0, maxValue = 0;

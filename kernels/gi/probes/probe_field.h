@@ -8,8 +8,10 @@
 //     outermost probes and the bounds, would get no light at all),
 //   - Chebyshev visibility from the probe's filtered distance (mean μ, mean² of the distance):
 //     with r the distance from the probe to the (biased) point, r ≤ μ is visible, else
-//     σ² / (σ² + (r − μ)²), σ² = |mean² − μ²|, raised to grid.chebyshev_power (DDGI's sharpening);
-// and the weights renormalised. Layout of the maps: probe_types.h.
+//     σ² / (σ² + (r − μ)²), σ² = |mean² − μ²|, raised to grid.chebyshev_power (DDGI's sharpening),
+//   - the probe's state (probe_types.h): 0 for a probe classified as inside geometry;
+// and the weights renormalised. The backface and visibility terms look from the probe's relocated
+// position (grid point + offset); the trilinear weights use the grid cell. Layouts: probe_types.h.
 #pragma once
 #include "common/math.h"
 #include "gi/probes/probe_types.h"
@@ -75,6 +77,7 @@ inline float2 probe_sample_distance(global const float2* distance, int probe, in
   return mix(top, bottom, t.y);
 }
 
+// The grid point of probe i (its position before relocation).
 inline float3 probe_position(const GiProbeGrid* g, int3 i) {
   return vload3(0, g->origin) + convert_float3(i) * vload3(0, g->spacing);
 }
@@ -82,7 +85,8 @@ inline float3 probe_position(const GiProbeGrid* g, int3 i) {
 // Irradiance E (W/m²) at surface point x with shading normal n, geometric normal ng and unit
 // direction wo towards the viewer (the camera, or a probe ray's origin).
 inline float3 probe_field_irradiance(const GiProbeGrid* g, global const float4* irradiance,
-                                     global const float2* distance, float3 x, float3 n, float3 ng, float3 wo) {
+                                     global const float2* distance, global const float4* probeStates, float3 x,
+                                     float3 n, float3 ng, float3 wo) {
   int3 count = vload3(0, g->count);
   float3 spacing = vload3(0, g->spacing);
   // Self-shadowing bias (DDGI): the visibility test looks from a point moved off the surface.
@@ -101,7 +105,9 @@ inline float3 probe_field_irradiance(const GiProbeGrid* g, global const float4* 
     float w = tri.x * tri.y * tri.z;
     int3 pi = min(base + off, count - 1);  // a one-probe axis uses probe 0 for both corners
     int probe = (pi.z * count.y + pi.y) * count.x + pi.x;
-    float3 pp = probe_position(g, pi);
+    float4 state = probeStates[probe];
+    float3 pp = probe_position(g, pi) + state.xyz;
+    w *= state.w;
     float3 toProbe = pp - x;
     float len = length(toProbe);
     w *= len > 0.0f ? fmax(g->backface_floor, dot(n, toProbe / len)) : 1.0f;  // seed 004 eq. 7

@@ -13,13 +13,14 @@ kernel void probe_oct_round_trip(global const float4* dirs, global float4* encod
 // The scalar probe_field_irradiance() (what probe rays use) at every pixel of a G-buffer, as
 // probe_shade writes it with down = 1: the reference for the lane-wise shading kernel.
 kernel void probe_shade_scalar(GiProbeGrid grid, global const float4* irradiance, global const float2* distance,
-                               GiView camera, global const float4* gPosition, global const float4* gGeoNormal,
-                               global const float4* gNormal, global const float4* gAlbedo, global float4* out) {
+                               global const float4* probeStates, GiView camera, global const float4* gPosition,
+                               global const float4* gGeoNormal, global const float4* gNormal, global const float4* gAlbedo, global float4* out) {
   int px = get_global_id(0), py = get_global_id(1);
   if (px >= camera.width || py >= camera.height) return;
   size_t i = (size_t)py * camera.width + px;
   float4 p = gPosition[i];
   float3 wo = normalize(vload3(0, camera.eye) - p.xyz);
-  float3 E = probe_field_irradiance(&grid, irradiance, distance, p.xyz, gNormal[i].xyz, gGeoNormal[i].xyz, wo);
+  float3 E = probe_field_irradiance(&grid, irradiance, distance, probeStates, p.xyz, gNormal[i].xyz,
+                                    gGeoNormal[i].xyz, wo);
   out[i] = p.w != 0.0f ? (float4)(gAlbedo[i].xyz * GI_INV_PI * E, 0.0f) : (float4)(0.0f);
 }

@@ -11,6 +11,10 @@
 //               first surface around the texel's direction (the filtered distance of the paper).
 // Probe p's irradiance texel (x, y) is irradiance[p · (irradiance_res + 2)² + y · (irradiance_res + 2) + x];
 // interior texels are 1 … res, texel x covers octahedral coordinates [(x − 1)/res, x/res]·2 − 1.
+//
+// Per probe, a state float4 (DDGI relocation and classification, Majercik et al. 2021): xyz = the
+// probe's offset (metres) from its grid point — it traces and is seen from grid point + offset —
+// and w = 1 for an active probe, 0 for one classified as inside geometry (it gets no weight).
 #pragma once
 
 #include "../../common/shared_types.h"

@@ -7,6 +7,10 @@
 //   probe_blend_distance   one work-item per distance texel: weighted mean and mean² of the hit
 //                          distance with weights max(0, n·ω)^GI_PROBE_DISTANCE_EXPONENT, blended;
 //   probe_border_*         copy the texels across the octahedral seams into each map's border;
+//   probe_relocate         one work-item per probe: DDGI relocation and classification from the
+//                          update's rays (Majercik et al. 2021, §5: a probe whose rays hit back
+//                          faces is inside geometry; it moves out through the nearest one, or is
+//                          switched off when it cannot);
 //   probe_shade            one work-item per camera pixel: ρ/π · E from probe_field_irradiance().
 // Radiance at a ray hit = the hit's emission (only emitters without a punctual stand-in: those
 // with one already light the scene through it) + ρ/π · (E_direct + E_probes), where E_direct sums
@@ -29,18 +33,20 @@ inline int3 probe_index3(const GiProbeGrid* g, int probe) {
   return (int3)(probe % g->count[0], (probe / g->count[0]) % g->count[1], probe / (g->count[0] * g->count[1]));
 }
 
-// rayDirs: this update's unit ray directions (the same for every probe). Output per ray:
-// (radiance towards the probe, hit distance); a miss records zero radiance at grid.max_distance.
+// rayDirs: this update's unit ray directions (the same for every probe), traced from each probe's
+// relocated position. Output per ray: (radiance towards the probe, ±hit distance), the distance
+// negative when the ray hit the back of a single-sided surface (for probe_relocate; the blends use
+// its magnitude); a miss records zero radiance at grid.max_distance.
 kernel void probe_trace(GiProbeGrid grid, GI_BVH_ARGS, global const float4* positions, global const float4* normals,
                         global const float4* tangents, global const uint* triangleInstance,
                         global const uint* instanceEmits, global const GiLight* lights, int lightCount,
                         global const float4* rayDirs, global const float4* irradiance, global const float2* distance,
-                        int multiBounce, global float4* rayResults) {
+                        global const float4* probeStates, int multiBounce, global float4* rayResults) {
   int gid = get_global_id(0);
   int probe = gid / grid.rays, ray = gid % grid.rays;
   if (probe >= probe_total(&grid)) return;
   GiBvh bvh = GI_BVH_MAKE;
-  float3 o = probe_position(&grid, probe_index3(&grid, probe));
+  float3 o = probe_position(&grid, probe_index3(&grid, probe)) + probeStates[probe].xyz;
   float3 d = rayDirs[ray].xyz;
   GiHit hit;
   if (!trace_closest(&bvh, o, d, 0.0f, grid.max_distance, &hit)) {
@@ -49,6 +55,7 @@ kernel void probe_trace(GiProbeGrid grid, GI_BVH_ARGS, global const float4* posi
   }
   PtSurface sf = pt_surface(positions, normals, tangents, &bvh, hit.prim, hit.u, hit.v, true);
   float3 wo = -d, ng = sf.ng, n = sf.n;
+  bool backface = dot(ng, wo) < 0.0f && !bvh.materials[sf.material].double_sided;
   float3 L = (float3)(0.0f);
   if (instanceEmits[triangleInstance[hit.prim]] && dot(ng, wo) > 0.0f) L += pt_emission(&bvh, sf.material, sf.uv);
   if (dot(ng, wo) < 0.0f) { ng = -ng; n = -n; }
@@ -64,9 +71,9 @@ kernel void probe_trace(GiProbeGrid grid, GI_BVH_ARGS, global const float4* posi
     float tmax = isinf(dist) ? INFINITY : dist * (1.0f - 1e-4f);
     if (!trace_any(&bvh, x, wi, 0.0f, tmax)) E += El * cosI;
   }
-  if (multiBounce) E += probe_field_irradiance(&grid, irradiance, distance, sf.p, n, ng, wo);
+  if (multiBounce) E += probe_field_irradiance(&grid, irradiance, distance, probeStates, sf.p, n, ng, wo);
   L += s.diffuse * GI_INV_PI * E;
-  rayResults[gid] = (float4)(L, hit.t);
+  rayResults[gid] = (float4)(L, backface ? -hit.t : hit.t);
 }
 
 // The blend kernels: one work-item takes GI_VW texels of one probe's map as the lanes of floatV
@@ -137,7 +144,7 @@ kernel void probe_blend_distance(GiProbeGrid grid, global const float4* rayDirs,
   floatV zero = (floatV)(0.0f), s1 = zero, s2 = zero, wsum = zero;
   for (int r = 0; r < grid.rays; ++r) {
     float4 d = rayDirs[r];
-    float t = rays[r].w;
+    float t = fabs(rays[r].w);
     floatV w = fmax(nx * d.x + ny * d.y + nz * d.z, 0.0f);
 #pragma unroll
     for (int k = 0; k < GI_PROBE_DISTANCE_EXPONENT_LOG2; ++k) w *= w;  // max(0, cos)^(2^k), no pow()
@@ -180,10 +187,62 @@ inline int probe_border_source(int x, int y, int res) {
 PROBE_BORDER_KERNEL(probe_border_irradiance, float4)
 PROBE_BORDER_KERNEL(probe_border_distance, float2)
 
+// DDGI probe relocation and classification (Majercik et al. 2021, "Scaling probe-based real-time
+// dynamic global illumination for production", §5), from this update's rays of the probe:
+//   - more than `backfaceFraction` of the rays hit back faces: the probe is inside geometry. It
+//     moves through the nearest back face to `minFrontface` beyond it; it is classified inactive
+//     (state.w = 0) until an update sees it outside;
+//   - else, nearer than `minFrontface` to a front face: it moves away from that face to that
+//     distance; farther: it moves back towards its grid point by the margin it has.
+// A move is taken only while the offset stays inside the ellipsoid of 0.45 × the spacing around
+// the grid point (the probe stays in its own cell, so the trilinear weights remain meaningful).
+// move = 0: classification only.
+kernel void probe_relocate(GiProbeGrid grid, global const float4* rayDirs, global const float4* rayResults,
+                           float backfaceFraction, float minFrontface, int move, global float4* probeStates) {
+  int probe = get_global_id(0);
+  if (probe >= probe_total(&grid)) return;
+  global const float4* rays = rayResults + (size_t)probe * grid.rays;
+  int backfaces = 0;
+  float closestBack = INFINITY, closestFront = INFINITY;
+  float3 backDir = (float3)(0.0f), frontDir = (float3)(0.0f);
+  for (int r = 0; r < grid.rays; ++r) {
+    float t = rays[r].w;
+    float3 d = rayDirs[r].xyz;
+    if (t < 0.0f) {
+      ++backfaces;
+      if (-t < closestBack) { closestBack = -t; backDir = d; }
+    } else if (t < closestFront) {
+      closestFront = t;
+      frontDir = d;
+    }
+  }
+  float4 state = probeStates[probe];
+  bool inside = (float)backfaces > backfaceFraction * (float)grid.rays;
+  state.w = inside ? 0.0f : 1.0f;
+  if (move) {
+    float3 offset = state.xyz, moved = offset;
+    if (inside) {
+      moved += backDir * (closestBack + minFrontface);
+    } else if (closestFront < minFrontface) {
+      moved -= frontDir * (minFrontface - closestFront);
+    } else {
+      float len = length(offset);
+      if (len > 0.0f) moved -= offset / len * fmin(closestFront - minFrontface, len);
+    }
+    float3 e = moved / (0.45f * vload3(0, grid.spacing));
+    if (dot(e, e) < 1.0f) state.xyz = moved;
+  }
+  probeStates[probe] = state;
+}
+
 // probe_field_irradiance() for GI_VW pixels at once, lanes as floatV (PERFORMANCE_FACTS.md 2:
 // a per-pixel loop over the 8 probes would run as scalar code). The formulas are those of
-// probe_field.h, written lane-wise; map texels are gathered per lane. The octahedral footprint of
-// the normal is the same for the 8 probes and is computed once.
+// probe_field.h, written lane-wise. What bounds this kernel on a CPU is the per-lane loads of map
+// texels (8 probes × 8 bilinear taps per pixel), so each load fetches a whole record: one 128-bit
+// load per irradiance tap (rgb + unused w), one per row of two adjacent distance taps
+// (mean, mean², mean, mean²) and one for the probe's state: 7 loads per probe instead of 20
+// scalar gathers. The octahedral footprint of the normal is the same for the 8 probes and is
+// computed once.
 inline void probe_octahedral_footprintV(floatV dx, floatV dy, floatV dz, int res, intV* offset, floatV* tx,
                                         floatV* ty) {
   floatV inv = 1.0f / (fabs(dx) + fabs(dy) + fabs(dz));
@@ -201,16 +260,30 @@ inline void probe_octahedral_footprintV(floatV dx, floatV dy, floatV dz, int res
   *offset = y0 * (res + 2) + x0;
 }
 
-inline floatV probe_bilerpV(global const float* map, intV i00, int rowStride, int component, int texelFloats,
-                            floatV tx, floatV ty) {
-  intV a = i00 * texelFloats + component, b = a + texelFloats, c = a + rowStride * texelFloats, d = c + texelFloats;
-  floatV top = mix(GI_GATHER(floatV, map, a), GI_GATHER(floatV, map, b), tx);
-  floatV bottom = mix(GI_GATHER(floatV, map, c), GI_GATHER(floatV, map, d), tx);
-  return mix(top, bottom, ty);
+// Bilinear irradiance of float4 texels i00, i00 + 1, i00 + side, i00 + side + 1.
+inline float3V probe_irradiance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty) {
+  floatV ar, ag, ab, br, bg, bb, cr, cg, cb, dr, dg, db, unused;
+  GI_GATHER_AOS4(float, map, i00, ar, ag, ab, unused)
+  GI_GATHER_AOS4(float, map, i00 + 1, br, bg, bb, unused)
+  GI_GATHER_AOS4(float, map, i00 + side, cr, cg, cb, unused)
+  GI_GATHER_AOS4(float, map, i00 + side + 1, dr, dg, db, unused)
+  return f3v(mix(mix(ar, br, tx), mix(cr, dr, tx), ty), mix(mix(ag, bg, tx), mix(cg, dg, tx), ty),
+             mix(mix(ab, bb, tx), mix(cb, db, tx), ty));
+}
+
+// Bilinear (mean, mean²) of float2 texels i00 … i00 + side + 1: a row's two taps are one record.
+inline void probe_distance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty, floatV* mean,
+                                   floatV* mean2) {
+  floatV am, am2, bm, bm2, cm, cm2, dm, dm2;
+  GI_GATHER_SPAN4(float, map, i00 * 2, am, am2, bm, bm2)
+  GI_GATHER_SPAN4(float, map, (i00 + side) * 2, cm, cm2, dm, dm2)
+  *mean = mix(mix(am, bm, tx), mix(cm, dm, tx), ty);
+  *mean2 = mix(mix(am2, bm2, tx), mix(cm2, dm2, tx), ty);
 }
 
 inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float* irradiance,
-                                       global const float* distance, float3V x, float3V n, float3V ng, float3V wo) {
+                                       global const float* distance, global const float* probeStates, float3V x,
+                                       float3V n, float3V ng, float3V wo) {
   int cx = g->count[0], cy = g->count[1], cz = g->count[2];
   float sx = g->spacing[0], sy = g->spacing[1], sz = g->spacing[2];
   float ox = g->origin[0], oy = g->origin[1], oz = g->origin[2];
@@ -235,7 +308,11 @@ inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float*
     floatV w = (offx ? ax : 1.0f - ax) * (offy ? ay : 1.0f - ay) * (offz ? az : 1.0f - az);
     intV pix = min(bx + offx, cx - 1), piy = min(by + offy, cy - 1), piz = min(bz + offz, cz - 1);
     intV probe = (piz * cy + piy) * cx + pix;
-    floatV ppx = ox + convert_floatV(pix) * sx, ppy = oy + convert_floatV(piy) * sy, ppz = oz + convert_floatV(piz) * sz;
+    floatV movedX, movedY, movedZ, active;  // the probe's state: relocation offset, active flag
+    GI_GATHER_AOS4(float, probeStates, probe, movedX, movedY, movedZ, active)
+    w *= active;
+    floatV ppx = ox + convert_floatV(pix) * sx + movedX, ppy = oy + convert_floatV(piy) * sy + movedY,
+           ppz = oz + convert_floatV(piz) * sz + movedZ;
     floatV tpx = ppx - x.x, tpy = ppy - x.y, tpz = ppz - x.z;
     floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
     w *= GI_SEL((floatV)(1.0f), fmax(g->backface_floor, (n.x * tpx + n.y * tpy + n.z * tpz) / len), len > 0.0f);
@@ -243,21 +320,19 @@ inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float*
     floatV r = sqrt(fpx * fpx + fpy * fpy + fpz * fpz);
     intV far = r > 0.0f;
     intV distOffset;
-    floatV dtx, dty;
+    floatV dtx, dty, mean, mean2;
     probe_octahedral_footprintV(GI_SEL(n.x, fpx, far), GI_SEL(n.y, fpy, far), GI_SEL(n.z, fpz, far), dres,
                                 &distOffset, &dtx, &dty);
-    intV d00 = probe * (dside * dside) + distOffset;
-    floatV mean = probe_bilerpV(distance, d00, dside, 0, 2, dtx, dty);
-    floatV mean2 = probe_bilerpV(distance, d00, dside, 1, 2, dtx, dty);
+    probe_distance_bilerpV(distance, probe * (dside * dside) + distOffset, dside, dtx, dty, &mean, &mean2);
     floatV variance = fabs(mean2 - mean * mean), d = r - mean;
     floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
 #pragma unroll
     for (int k = 0; k < GI_PROBE_MAX_CHEBYSHEV_POWER; ++k) v = k < g->chebyshev_power ? v * cheb : v;
     w *= GI_SEL((floatV)(1.0f), v, r > mean);
-    intV i00 = probe * (iside * iside) + irrOffset;
-    Ex += w * probe_bilerpV(irradiance, i00, iside, 0, 4, itx, ity);
-    Ey += w * probe_bilerpV(irradiance, i00, iside, 1, 4, itx, ity);
-    Ez += w * probe_bilerpV(irradiance, i00, iside, 2, 4, itx, ity);
+    float3V e = probe_irradiance_bilerpV(irradiance, probe * (iside * iside) + irrOffset, iside, itx, ity);
+    Ex += w * e.x;
+    Ey += w * e.y;
+    Ez += w * e.z;
     wsum += w;
   }
   floatV inv = GI_SEL(zero, 1.0f / wsum, wsum > 0.0f);
@@ -267,7 +342,8 @@ inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float*
 // One work-item: GI_VW adjacent pixels (u, v) of a (⌈W/down⌉ × ⌈H/down⌉) image, pixel (u, v)
 // evaluated at camera pixel (u·down, v·down): down = 1 writes the indirect radiance ρ/π · E,
 // down > 1 writes E for the geometry-aware upsampler (gi/filters). Background: 0.
-kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, global const float2* distance, GiView camera,
+kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, global const float2* distance,
+                        global const float4* probeStates, GiView camera,
                         global const float4* gPosition, global const float4* gGeoNormal, global const float4* gNormal,
                         global const float4* gAlbedo, int down, global float4* out) {
   int u0 = get_global_id(0) * GI_VW, v = get_global_id(1);
@@ -277,17 +353,17 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   size_t row = (size_t)min(v * down, camera.height - 1) * camera.width;
   // Camera pixel of each lane (lanes past the end repeat the last valid one).
   intV px = min(min((intV)(u0) + (intV)(GI_LANES), (intV)(u0 + valid - 1)) * down, camera.width - 1);
-  floatV pw;
-  float3V x, ng, n, alb;
-  intV i4 = (convert_intV(px) + (int)row) * 4;
+  // One 128-bit load per lane and G-buffer record.
+  intV i = convert_intV(px) + (int)row;
   global const float* P = (global const float*)gPosition;
   global const float* G = (global const float*)gGeoNormal;
   global const float* N = (global const float*)gNormal;
   global const float* A = (global const float*)gAlbedo;
-  x = f3v(GI_GATHER(floatV, P, i4), GI_GATHER(floatV, P, i4 + 1), GI_GATHER(floatV, P, i4 + 2));
-  pw = GI_GATHER(floatV, P, i4 + 3);
-  ng = f3v(GI_GATHER(floatV, G, i4), GI_GATHER(floatV, G, i4 + 1), GI_GATHER(floatV, G, i4 + 2));
-  n = f3v(GI_GATHER(floatV, N, i4), GI_GATHER(floatV, N, i4 + 1), GI_GATHER(floatV, N, i4 + 2));
+  floatV pw, unused;
+  float3V x, ng, n, alb;
+  GI_GATHER_AOS4(float, P, i, x.x, x.y, x.z, pw)
+  GI_GATHER_AOS4(float, G, i, ng.x, ng.y, ng.z, unused)
+  GI_GATHER_AOS4(float, N, i, n.x, n.y, n.z, unused)
   float3V wo;
   if (camera.orthographic) {
     float3 w = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
@@ -297,9 +373,10 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
     floatV inv = 1.0f / sqrt(dx * dx + dy * dy + dz * dz);
     wo = f3v(dx * inv, dy * inv, dz * inv);
   }
-  float3V E = probe_field_irradianceV(&grid, (global const float*)irradiance, (global const float*)distance, x, n, ng, wo);
+  float3V E = probe_field_irradianceV(&grid, (global const float*)irradiance, (global const float*)distance,
+                                      (global const float*)probeStates, x, n, ng, wo);
   if (down == 1) {
-    alb = f3v(GI_GATHER(floatV, A, i4), GI_GATHER(floatV, A, i4 + 1), GI_GATHER(floatV, A, i4 + 2));
+    GI_GATHER_AOS4(float, A, i, alb.x, alb.y, alb.z, unused)
     E = f3v(alb.x * GI_INV_PI * E.x, alb.y * GI_INV_PI * E.y, alb.z * GI_INV_PI * E.z);
   }
   intV surface = pw != 0.0f;

@@ -8,6 +8,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "cl/gather_width.h"
 #include "gi/emitter_flags.h"
 #include "util/error.h"
 
@@ -105,14 +106,20 @@ std::vector<glm::vec4> probeRayDirections(int rays, uint32_t update) {
 }
 
 ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& s)
-    : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce), downsample_(s.downsample) {
+    : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce), downsample_(s.downsample),
+      relocation_(s.relocate), backfaceFraction_(s.backfaceFraction),
+      minFrontface_(s.minFrontface * std::min({grid_.spacing[0], grid_.spacing[1], grid_.spacing[2]})) {
   upsampleTest_.tauZ = s.tauZ;
   upsampleTest_.tauNDegrees = s.tauNDegrees;
   if (downsample_ > 1) upsampler_ = std::make_unique<GeometryAwareUpsampler>(ctx, "probes: upsample");
   bvh_ = std::make_unique<DeviceBvh>(ctx, scene, deviceScene);
+  // The shading kernel is bound by per-lane loads of map texels: the gather width (8 lanes on
+  // AVX2, where 16-lane code spills registers; cl/gather_width.h).
+  vectorWidth_ = cl::gatherVectorWidth(ctx);
   program_ = ctx.buildProgram("kernels/gi/probes/probes.cl",
-                              {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)}});
+                              cl::withGatherWidth(ctx, {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)}}));
   trace_ = program_.kernel("probe_trace");
+  relocate_ = program_.kernel("probe_relocate");
   blendIrradiance_ = program_.kernel("probe_blend_irradiance");
   blendDistance_ = program_.kernel("probe_blend_distance");
   borderIrradiance_ = program_.kernel("probe_border_irradiance");
@@ -121,12 +128,14 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   size_t probes = size_t(probeCount());
   size_t irrTexels = probes * size_t(s.irradianceRes + 2) * size_t(s.irradianceRes + 2);
   size_t distTexels = probes * size_t(s.distanceRes + 2) * size_t(s.distanceRes + 2);
-  ctx.requireAllocation(irrTexels * 16 + distTexels * 8 + probes * size_t(s.rays) * 16,
+  ctx.requireAllocation(irrTexels * 16 + distTexels * 8 + probes * size_t(s.rays) * 16 + probes * 16,
                         "probes: maps and rays (probes.grid_*, probes.*_res, probes.rays)");
   irradiance_ = cl::Buffer(ctx, irrTexels * 16, CL_MEM_READ_WRITE, "probe irradiance maps");
   distance_ = cl::Buffer(ctx, distTexels * 8, CL_MEM_READ_WRITE, "probe distance maps");
   rayResults_ = cl::Buffer(ctx, probes * size_t(s.rays) * 16, CL_MEM_READ_WRITE, "probe ray results");
   rayDirs_ = cl::Buffer(ctx, size_t(s.rays) * 16, CL_MEM_READ_ONLY, "probe ray directions");
+  states_ = cl::Buffer(ctx, probes * 16, CL_MEM_READ_WRITE, "probe states");
+  ctx.fill(states_, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));  // at the grid points, active
   // Before the first update: no light, and every direction open up to the ray length (the first
   // update replaces both wherever a ray landed).
   ctx.fill(irradiance_, glm::vec4(0.0f));
@@ -134,12 +143,7 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   instanceEmits_ = ctx.upload(instanceEmissionFlags(scene), "probe instance emission flags");
 }
 
-void ProbeField::update(const DeviceScene& scene, float maxHysteresis) {
-  float hysteresis = std::min(maxHysteresis, float(updates_) / float(updates_ + 1));
-  std::vector<glm::vec4> dirs = probeRayDirections(grid_.rays, updates_);
-  ctx_.write(rayDirs_, dirs.data(), dirs.size() * sizeof(glm::vec4));
-  size_t probes = size_t(probeCount());
-
+void ProbeField::trace(const DeviceScene& scene, bool shadeHits) {
   unsigned a = 0;
   trace_.setArg(a++, grid_);
   a = bvh_->setArgs(trace_, a);
@@ -149,17 +153,44 @@ void ProbeField::update(const DeviceScene& scene, float maxHysteresis) {
   trace_.setArg(a++, scene.triangleInstance);
   trace_.setArg(a++, instanceEmits_);
   trace_.setArg(a++, scene.lights);
-  trace_.setArg(a++, int(scene.lightCount));
+  trace_.setArg(a++, shadeHits ? int(scene.lightCount) : 0);  // no lights: no shadow rays
   trace_.setArg(a++, rayDirs_);
   trace_.setArg(a++, irradiance_);
   trace_.setArg(a++, distance_);
-  trace_.setArg(a++, int(multiBounce_ && updates_ > 0));
+  trace_.setArg(a++, states_);
+  trace_.setArg(a++, int(shadeHits && multiBounce_ && updates_ > 0));
   trace_.setArg(a++, rayResults_);
-  size_t rays = probes * size_t(grid_.rays);
+  size_t rays = size_t(probeCount()) * size_t(grid_.rays);
   ctx_.launch(trace_, cl::NDRange::d1(cl::roundUp(rays, 64), 64), "probes: trace rays");
+}
+
+void ProbeField::relocateFromRays(bool moveProbes) {
+  relocate_.args(grid_, rayDirs_, rayResults_, backfaceFraction_, minFrontface_, int(moveProbes), states_);
+  ctx_.launch(relocate_, cl::NDRange::d1(cl::roundUp(size_t(probeCount()), 64), 64), "probes: relocate");
+}
+
+void ProbeField::relocate(const DeviceScene& scene, int passes) {
+  if (!relocation_) return;
+  for (int i = 0; i < passes; ++i) {
+    // Directions of update numbers no update uses (the high half), a new rotation per pass.
+    std::vector<glm::vec4> dirs = probeRayDirections(grid_.rays, 0x80000000u + relocationPasses_++);
+    ctx_.write(rayDirs_, dirs.data(), dirs.size() * sizeof(glm::vec4));
+    trace(scene, false);
+    relocateFromRays(true);
+  }
+}
+
+void ProbeField::update(const DeviceScene& scene, float maxHysteresis, bool moveProbes) {
+  float k = float(updates_ - meanStart_);
+  float hysteresis = std::min(maxHysteresis, k / (k + 1.0f));
+  std::vector<glm::vec4> dirs = probeRayDirections(grid_.rays, updates_);
+  ctx_.write(rayDirs_, dirs.data(), dirs.size() * sizeof(glm::vec4));
+  size_t probes = size_t(probeCount());
+  trace(scene, true);
+  if (relocation_) relocateFromRays(moveProbes);
 
   // The blend kernels take the vector width's worth of texels of one probe per work-item.
-  size_t vw = size_t(ctx_.vectorWidth());
+  size_t vw = size_t(vectorWidth_);
   auto items = [&](int res) { return probes * ((size_t(res) * size_t(res) + vw - 1) / vw); };
   blendIrradiance_.args(grid_, rayDirs_, rayResults_, hysteresis, irradiance_);
   ctx_.launch(blendIrradiance_, cl::NDRange::d1(cl::roundUp(items(grid_.irradiance_res), 16), 16),
@@ -183,8 +214,8 @@ void ProbeField::shade(const GBuffer& g, cl::Buffer& indirect) {
       low_ = cl::Buffer(ctx_, size_t(lw) * lh * 16, CL_MEM_READ_WRITE, "probes low-res irradiance");
     target = &low_;
   }
-  shade_.args(grid_, irradiance_, distance_, g.view, g.position, g.geoNormal, g.normal, g.albedo, d, *target);
-  int groups = (lw + ctx_.vectorWidth() - 1) / ctx_.vectorWidth();  // vector width's worth of pixels per item
+  shade_.args(grid_, irradiance_, distance_, states_, g.view, g.position, g.geoNormal, g.normal, g.albedo, d, *target);
+  int groups = (lw + vectorWidth_ - 1) / vectorWidth_;  // vector width's worth of pixels per item
   ctx_.launch(shade_, cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(lh, 8), 8, 8), "probes: shade");
   if (d > 1) upsampler_->run(g, low_, d, upsampleTest_, indirect);
 }

@@ -8,8 +8,8 @@
 //   field.update(deviceScene, 0.97f);   // one update: rays, blend with hysteresis, borders
 //   field.shade(gbuffer, indirect);     // ρ/π · E per pixel
 //
-// Not handled: probe relocation or classification (probes inside geometry are only muted by the
-// visibility test), glossy indirect light (the paper's probe ray marching), moving geometry (the
+// Probes inside geometry are moved out or switched off (DDGI relocation and classification).
+// Not handled: glossy indirect light (the paper's probe ray marching), moving geometry (the
 // BVH is built once; lights may move).
 #pragma once
 #include <cstdint>
@@ -40,6 +40,9 @@ struct ProbeSettings {
   float normalBias = 0.045f;     // fractions of the smallest probe spacing
   float viewBias = 0.18f;
   float maxDistance = 0.0f;      // metres; 0 = the scene's bounding-box diagonal
+  bool relocate = true;          // DDGI relocation and classification of probes inside geometry
+  float backfaceFraction = 0.25f;  // a probe with more of its rays on back faces is inside geometry
+  float minFrontface = 0.1f;     // relocated probes keep this distance to surfaces (fraction of the smallest spacing)
   int downsample = 1;            // shade at 1/downsample resolution, then upsample geometry-aware
   float tauZ = 0.05f, tauNDegrees = 25.0f;  // the upsampler's depth and normal tolerances
 };
@@ -66,9 +69,18 @@ public:
   ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& settings);
 
   // One update: trace grid.rays rays per probe, blend into the maps with weight
-  // min(maxHysteresis, k/(k+1)) for the old value at update k (k = 0 first: the running mean over
-  // the first updates, then an exponential average), copy the borders.
-  void update(const DeviceScene& deviceScene, float maxHysteresis);
+  // min(maxHysteresis, k/(k+1)) for the old value at update k (k = 0 first, or at the last
+  // restartMean(): the running mean over the updates since, then an exponential average), copy
+  // the borders.
+  // With relocation on, the update's rays also classify the probes and, when moveProbes, move them
+  // (kernels/gi/probes/probes.cl, probe_relocate).
+  void update(const DeviceScene& deviceScene, float maxHysteresis, bool moveProbes = true);
+  // Relocation alone: `passes` times, trace distances only and move the probes (before a static
+  // rebuild, so that the maps are built at the final positions). Nothing when relocation is off.
+  void relocate(const DeviceScene& deviceScene, int passes);
+  // The next update replaces the maps and starts a new running mean (its rays already see the
+  // field so far: with multi-bounce, more bounces than the updates before).
+  void restartMean() { meanStart_ = updates_; }
   void shade(const GBuffer& gbuffer, cl::Buffer& indirect);
 
   const GiProbeGrid& grid() const { return grid_; }
@@ -76,6 +88,7 @@ public:
   uint32_t updates() const { return updates_; }
   const cl::Buffer& irradiance() const { return irradiance_; }  // float4 per texel, layout probe_types.h
   const cl::Buffer& distance() const { return distance_; }      // float2 per texel
+  const cl::Buffer& states() const { return states_; }          // float4 per probe: offset, active
   uint64_t mapBytes() const { return irradiance_.bytes() + distance_.bytes(); }
   uint64_t rayBytes() const { return rayResults_.bytes() + rayDirs_.bytes(); }
   uint64_t bvhBytes() const { return bvh_->bytes(); }
@@ -85,13 +98,18 @@ private:
   GiProbeGrid grid_;
   bool multiBounce_;
   int downsample_;
+  int vectorWidth_;  // GI_VW of the probe program: pixels or texels per work-item
   GeometryTest upsampleTest_;
   std::unique_ptr<DeviceBvh> bvh_;
   std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   cl::Program program_;
-  cl::Kernel trace_, blendIrradiance_, blendDistance_, borderIrradiance_, borderDistance_, shade_;
-  cl::Buffer irradiance_, distance_, rayDirs_, rayResults_, instanceEmits_, low_;
-  uint32_t updates_ = 0;
+  cl::Kernel trace_, relocate_, blendIrradiance_, blendDistance_, borderIrradiance_, borderDistance_, shade_;
+  cl::Buffer irradiance_, distance_, states_, rayDirs_, rayResults_, instanceEmits_, low_;
+  bool relocation_;
+  float backfaceFraction_, minFrontface_;  // minFrontface_ in metres
+  void trace(const DeviceScene& deviceScene, bool shadeHits);
+  void relocateFromRays(bool moveProbes);
+  uint32_t updates_ = 0, meanStart_ = 0, relocationPasses_ = 0;
 };
 
 }  // namespace gi
