@@ -8,7 +8,8 @@
 //     outermost probes and the bounds, would get no light at all),
 //   - Chebyshev visibility from the probe's filtered distance (mean μ, mean² of the distance):
 //     with r the distance from the probe to the (biased) point, r ≤ μ is visible, else
-//     σ² / (σ² + (r − μ)²), σ² = |mean² − μ²|, raised to grid.chebyshev_power (DDGI's sharpening),
+//     σ² / (σ² + (r − μ)²), σ² = |mean² − μ²|, raised to GI_PROBE_CHEBYSHEV_POWER (DDGI's
+//     sharpening; a build define, so the power is a few multiplications; 0 = no visibility),
 //   - the probe's state (probe_types.h): 0 for a probe classified as inside geometry;
 // and the weights renormalised. The backface and visibility terms look from the probe's relocated
 // position (grid point + offset); the trilinear weights use the grid cell. Layouts: probe_types.h.
@@ -16,7 +17,9 @@
 #include "common/math.h"
 #include "gi/probes/probe_types.h"
 
-#define GI_PROBE_MAX_CHEBYSHEV_POWER 8  // the largest probes.chebyshev_power
+#ifndef GI_PROBE_CHEBYSHEV_POWER
+#define GI_PROBE_CHEBYSHEV_POWER 3  // probes.chebyshev_power
+#endif
 
 inline float probe_sign_not_zero(float v) { return v >= 0.0f ? 1.0f : -1.0f; }
 
@@ -117,7 +120,7 @@ inline float3 probe_field_irradiance(const GiProbeGrid* g, global const float4* 
     float variance = fabs(m.y - m.x * m.x), d = r - m.x;
     float cheb = variance / fmax(variance + d * d, 1e-30f), v = 1.0f;
 #pragma unroll
-    for (int k = 0; k < GI_PROBE_MAX_CHEBYSHEV_POWER; ++k) v = k < g->chebyshev_power ? v * cheb : v;
+    for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
     w *= r > m.x ? v : 1.0f;
     sum += w * probe_sample_irradiance(irradiance, probe, g->irradiance_res, n);
     wsum += w;

@@ -33,9 +33,8 @@ typedef struct {
   GI_I32 irradiance_res;     // interior texels per side of an irradiance map
   GI_I32 distance_res;       // interior texels per side of a distance map
   GI_I32 rays;               // rays per probe per update
-  GI_I32 chebyshev_power;    // the Chebyshev bound is raised to this power (sharper shadows)
   float backface_floor;      // smallest backface weight (a point facing away from every probe still blends)
-  float pad[3];
+  float pad[4];
 } GiProbeGrid;  // 80 bytes
 
 #ifndef __OPENCL_VERSION__

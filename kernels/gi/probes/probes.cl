@@ -327,7 +327,7 @@ inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float*
     floatV variance = fabs(mean2 - mean * mean), d = r - mean;
     floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
 #pragma unroll
-    for (int k = 0; k < GI_PROBE_MAX_CHEBYSHEV_POWER; ++k) v = k < g->chebyshev_power ? v * cheb : v;
+    for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
     w *= GI_SEL((floatV)(1.0f), v, r > mean);
     float3V e = probe_irradiance_bilerpV(irradiance, probe * (iside * iside) + irrOffset, iside, itx, ity);
     Ex += w * e.x;

@@ -51,7 +51,6 @@ GiProbeGrid fitProbeGrid(const Bounds& bounds, const ProbeSettings& s) {
   g.irradiance_res = s.irradianceRes;
   g.distance_res = s.distanceRes;
   g.rays = s.rays;
-  g.chebyshev_power = s.chebyshevPower;
   g.backface_floor = s.backfaceFloor;
   return g;
 }
@@ -117,7 +116,8 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   // AVX2, where 16-lane code spills registers; cl/gather_width.h).
   vectorWidth_ = cl::gatherVectorWidth(ctx);
   program_ = ctx.buildProgram("kernels/gi/probes/probes.cl",
-                              cl::withGatherWidth(ctx, {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)}}));
+                              cl::withGatherWidth(ctx, {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)},
+                                                        {"GI_PROBE_CHEBYSHEV_POWER", std::to_string(s.chebyshevPower)}}));
   trace_ = program_.kernel("probe_trace");
   relocate_ = program_.kernel("probe_relocate");
   blendIrradiance_ = program_.kernel("probe_blend_irradiance");
