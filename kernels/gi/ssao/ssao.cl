@@ -31,8 +31,8 @@
 // How (PERFORMANCE_FACTS.md): one work-item handles GI_VW adjacent pixels of a row as lanes of
 // floatV (16 on CPU devices, 1 on GPUs); every per-pixel branch of the formulas above is a lane
 // mask, the sample loop has a constant trip count and is unrolled, and the surfaces seen at the
-// projected samples are gathered lane by lane, one 128-bit record load per lane. A group cut by
-// the right image border reads its last pixel repeatedly and stores only its valid lanes.
+// projected samples are gathered lane by lane. A group cut by the right image border reads its
+// last pixel repeatedly and stores only its valid lanes.
 
 // Loads GI_VW float4 of `plane` starting at pixel i into four floatV (valid lanes, the rest repeat).
 #define SSAO_LOAD4(plane, i, valid, X, Y, Z, W)                                   \
@@ -159,27 +159,26 @@ kernel void ssao_occlusion(int width, int height, GiView camera, global const fl
     if (!GI_ANY(ok)) continue;
     intV q = GI_SEL((intV)(0), convert_intV(GI_SEL((floatV)(0.0f), sy, ok)) * width +
                                    convert_intV(GI_SEL((floatV)(0.0f), sx, ok)), ok);
-    floatV qox, qoy, qd, zq, qx, qy, qz;
-    GI_GATHER_AOS4(float, pl, q, qox, qoy, qd, zq)  // one 128-bit load per lane
-    ssao_oct_decodeV(qox, qoy, &qx, &qy, &qz);
+    intV q4 = q * 4;
+    floatV qx, qy, qz;
+    ssao_oct_decodeV(GI_GATHER(floatV, pl, q4), GI_GATHER(floatV, pl, q4 + 1), &qx, &qy, &qz);
+    floatV qd = GI_GATHER(floatV, pl, q4 + 2), zq = GI_GATHER(floatV, pl, q4 + 3);
     // Background at q: its depth is infinite and fails the range check.
     floatV behind = Sx * qx + Sy * qy + Sz * qz - qd;  // (S − Q) · n_q
     intV occ = ok & (behind < -bias) & (fabs(zq - zP) < radius);
     occluded += GI_SEL((floatV)(0.0f), (floatV)(1.0f), occ);
     if (bleeding && GI_ANY(occ)) {
-      floatV Qx, Qy, Qz, Mx, My, Mz, Lx, Ly, Lz, unused;
-      GI_GATHER_AOS4(float, pos, q, Qx, Qy, Qz, unused)
-      GI_GATHER_AOS4(float, nrm, q, Mx, My, Mz, unused)
-      GI_GATHER_AOS4(float, dir, q, Lx, Ly, Lz, unused)
+      floatV Qx = GI_GATHER(floatV, pos, q4), Qy = GI_GATHER(floatV, pos, q4 + 1), Qz = GI_GATHER(floatV, pos, q4 + 2);
       floatV vx = Qx - Px, vy = Qy - Py, vz = Qz - Pz;
       floatV d2 = vx * vx + vy * vy + vz * vz;
       floatV invD = rsqrt(fmax(d2, 1e-30f));
       floatV cosR = fmax((nx * vx + ny * vy + nz * vz) * invD, 0.0f);
-      floatV cosS = fmax(-(Mx * vx + My * vy + Mz * vz) * invD, 0.0f);
+      floatV cosS = fmax(-(GI_GATHER(floatV, nrm, q4) * vx + GI_GATHER(floatV, nrm, q4 + 1) * vy +
+                           GI_GATHER(floatV, nrm, q4 + 2) * vz) * invD, 0.0f);
       floatV f = GI_SEL((floatV)(0.0f), As * cosS * cosR / fmax(d2, d2min), occ);
-      Ex += Lx * f;
-      Ey += Ly * f;
-      Ez += Lz * f;
+      Ex += GI_GATHER(floatV, dir, q4) * f;
+      Ey += GI_GATHER(floatV, dir, q4 + 1) * f;
+      Ez += GI_GATHER(floatV, dir, q4 + 2) * f;
     }
   }
   ssao_store1(occlusionOut, i0, valid, occluded / (float)GI_SSAO_SAMPLES);

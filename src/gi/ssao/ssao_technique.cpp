@@ -9,7 +9,6 @@
 //   of its depth at the pixel centre;
 // - radius 0 = 5 % of the scene's bounding-box diagonal; bias 0 = 1 % of the radius.
 #include "gi/ssao/ssao_technique.h"
-#include "cl/gather_width.h"
 #include "util/halton.h"
 
 #include <cmath>
@@ -19,10 +18,9 @@ namespace gi {
 
 namespace {
 
-// Both kernels take the gather width's worth of adjacent pixels of a row per work-item
-// (cl/gather_width.h: the occlusion test gathers a record per lane and sample; 8 lanes on AVX2).
+// Both kernels take the vector width's worth of adjacent pixels of a row per work-item.
 cl::NDRange pixelGroups(const cl::Context& ctx, const GBuffer& g) {
-  int vw = cl::gatherVectorWidth(ctx), groups = (g.width + vw - 1) / vw;
+  int vw = ctx.vectorWidth(), groups = (g.width + vw - 1) / vw;
   return cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(g.height, 8), 8, 8);
 }
 
@@ -79,8 +77,7 @@ void SsaoTechnique::setup(const FrameResources& f) {
 
 void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s) {
   if (s.samples != programSamples_) {
-    program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl",
-                                  cl::withGatherWidth(f.ctx, {{"GI_SSAO_SAMPLES", std::to_string(s.samples)}}));
+    program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)}});
     occlusionKernel_ = program_.kernel("ssao_occlusion");
     blurKernel_ = program_.kernel("ssao_blur_compose");
     planesKernel_ = program_.kernel("ssao_planes");
