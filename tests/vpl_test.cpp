@@ -30,6 +30,14 @@ Scene emptyCornellWithSpot() {
   return makeCornellBox(o);
 }
 
+// With blocks: depth and normal discontinuities for the geometry-aware passes.
+Scene cornellWithBlocksAndSpot() {
+  CornellOptions o;
+  o.withAreaLight = false;
+  o.spotLight = CornellSpotLight{};
+  return makeCornellBox(o);
+}
+
 template <typename T>
 std::vector<T> download(cl::Context& ctx, const cl::Buffer& b) {
   return ctx.download<T>(b);
@@ -233,10 +241,7 @@ TEST(Igi, OneByOnePatternEqualsVplExactly) {
 
 TEST(Igi, DiscontinuityFilterMatchesHost) {
   cl::Context& ctx = test::context();
-  CornellOptions o;  // with blocks: depth and normal discontinuities
-  o.withAreaLight = false;
-  o.spotLight = CornellSpotLight{};
-  Scene s = makeCornellBox(o);
+  Scene s = cornellWithBlocksAndSpot();
   const int W = 37, H = 31;
   Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=4"}));
   r.renderFrame();
@@ -291,10 +296,7 @@ TEST(Igi, DiscontinuityFilterMatchesHost) {
 // random E with negative values (second-order's net irradiance can be negative).
 TEST(Igi, GeometryAwareUpsamplerMatchesHost) {
   cl::Context& ctx = test::context();
-  CornellOptions o;
-  o.withAreaLight = false;
-  o.spotLight = CornellSpotLight{};
-  Scene s = makeCornellBox(o);
+  Scene s = cornellWithBlocksAndSpot();
   const int W = 37, H = 31;
   Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=4"}));
   r.renderFrame();
