@@ -18,23 +18,12 @@ namespace {
 
 using test::cornellWithSpot;
 
-RenderSettings settings(const std::string& technique, int w, int h, std::vector<std::string> sets) {
-  RenderSettings rs;
-  rs.width = w;
-  rs.height = h;
-  rs.technique = technique;
-  rs.sets = std::move(sets);
-  rs.sets.push_back("rsm.resolution=64");
-  rs.sets.push_back("shadow.resolution=256");
-  return rs;
-}
-
 }  // namespace
 
 TEST(Splat, EqualsVplWhenTheCutOffIsBeyondTheScene) {
   Scene s = cornellWithSpot(true);
   auto run = [&](const std::string& tech, std::vector<std::string> sets) {
-    Renderer r(test::context(), s, settings(tech, 45, 38, std::move(sets)));
+    Renderer r(test::context(), s, test::smallRenderSettings(tech, 45, 38, std::move(sets)));
     r.renderFrame();
     return r.indirectRadiance();
   };
@@ -49,7 +38,7 @@ TEST(Splat, EqualsAllPairsWithinItsEpsilonCutOff) {
   Scene s = cornellWithSpot(true);
   const int W = 45, H = 38, N = 200;
   for (float eps : {1.0f / 256.0f, 1e-4f}) {
-    Renderer r(ctx, s, settings("splat", W, H, {"splat.count=200", "splat.epsilon=" + std::to_string(eps)}));
+    Renderer r(ctx, s, test::smallRenderSettings("splat", W, H, {"splat.count=200", "splat.epsilon=" + std::to_string(eps)}));
     r.renderFrame();
     Image ind = r.indirectRadiance();
     VplGenerator gen(ctx);
@@ -88,7 +77,7 @@ TEST(Splat, InterleavedEqualsIgiWhenTheCutOffIsBeyondTheScene) {
   // Same sets (VPL k -> set k mod n·m, weights × n·m), same discontinuity filter: the same image.
   Scene s = cornellWithSpot(true);
   auto run = [&](const std::string& tech, std::vector<std::string> sets) {
-    Renderer r(test::context(), s, settings(tech, 45, 38, std::move(sets)));
+    Renderer r(test::context(), s, test::smallRenderSettings(tech, 45, 38, std::move(sets)));
     r.renderFrame();
     return r.indirectRadiance();
   };
