@@ -9,8 +9,9 @@
 //   surface it belongs to. Voxels whose normals cancel (|mean n| < 0.5: both sides of thin
 //   geometry) are lit from both sides (|n·ω|). Output: level 0, (L·α, α).
 // vct_mip_isotropic: parent = mean of its 8 children (premultiplied, so this conserves Σ L·α).
-// vct_mip_anisotropic: per parent and direction, the 2 children along the axis composited front
-//   to back (c = c_f + (1 − α_f)·c_b, α = α_f + (1 − α_f)·α_b), the 4 columns averaged.
+// vct_mip_anisotropic_first (level 1) / vct_mip_anisotropic (levels ≥ 2): per parent and direction,
+//   the 2 children along the axis composited front to back (c = c_f + (1 − α_f)·c_b,
+//   α = α_f + (1 − α_f)·α_b), the 4 columns averaged; one work-item per parent for all 6 directions.
 // SH voxels (vct.voxels=sh, voxel_types.h), after the radiance mips:
 // vct_sh_project: level 0, per voxel and channel the SH coefficients L·α·lobe(n) of its radiance
 //   (level 0 of the radiance chain), n its mean normal (both lobes when the normals cancel).
@@ -51,18 +52,37 @@ kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const Gi
   level0[v] = (float4)(L * vs.alpha, vs.alpha);
 }
 
-// Parent voxels of `level` (≥ 1) from the isotropic level below.
+// The 8 children of parent cell `cell` in the volume of edge nc, child k = dx + 2·dy + 4·dz.
+inline void vox_children(global const float4* vol, int nc, int3 cell, float4 ch[8]) {
+  size_t first = ((size_t)(2 * cell.z) * nc + 2 * cell.y) * nc + 2 * cell.x;
+  size_t row = (size_t)nc, slice = (size_t)nc * nc;
+  ch[0] = vol[first];
+  ch[1] = vol[first + 1];
+  ch[2] = vol[first + row];
+  ch[3] = vol[first + row + 1];
+  ch[4] = vol[first + slice];
+  ch[5] = vol[first + slice + 1];
+  ch[6] = vol[first + slice + row];
+  ch[7] = vol[first + slice + row + 1];
+}
+
+// Parent voxels of `level` (≥ 1) from the isotropic level below. Straight-line code (no loop):
+// PoCL vectorizes it across work-items (PERFORMANCE_FACTS point 1).
 kernel void vct_mip_isotropic(int N, int level, global float4* iso) {
-  int n = N >> level, nc = n * 2;
+  int n = N >> level;
   size_t v = get_global_id(0);
   if (v >= (size_t)n * n * n) return;
-  int3 cell = vox_cell(v, n);
-  int x = cell.x, y = cell.y, z = cell.z;
-  global const float4* child = iso + vox_level_offset(N, level - 1);
-  float4 sum = (float4)(0.0f);
-  for (int dz = 0; dz < 2; ++dz)
-    for (int dy = 0; dy < 2; ++dy)
-      for (int dx = 0; dx < 2; ++dx) sum += child[((size_t)(2 * z + dz) * nc + (2 * y + dy)) * nc + (2 * x + dx)];
+  float4 ch[8];
+  vox_children(iso + vox_level_offset(N, level - 1), 2 * n, vox_cell(v, n), ch);
+  // Summed in child order k = 0 … 7 from 0 (the order of the host mirror in the tests).
+  float4 sum = (float4)(0.0f) + ch[0];
+  sum += ch[1];
+  sum += ch[2];
+  sum += ch[3];
+  sum += ch[4];
+  sum += ch[5];
+  sum += ch[6];
+  sum += ch[7];
   iso[vox_level_offset(N, level) + v] = sum * 0.125f;
 }
 
@@ -89,24 +109,51 @@ inline size_t vox_directional_item(size_t gid, int n, int* dir, int3* childBase)
   return v;
 }
 
-// Parent voxels of `level` (≥ 1), all 6 directions, from level − 1 (isotropic level 0 or the
-// matching directional volume).
-kernel void vct_mip_anisotropic(int N, int level, global const float4* iso, global float4* aniso) {
-  int n = N >> level, nc = n * 2, dir;
-  int3 b;  // 2 × the parent's cell: its first child
-  size_t v = vox_directional_item(get_global_id(0), n, &dir, &b);
-  if (dir >= 6) return;
-  global const float4* child =
-      level == 1 ? iso : (global const float4*)aniso + vox_aniso_offset(N, level - 1, dir);
+// A parent seen along direction dir (0..5 = +x, −x, +y, −y, +z, −z) from its 8 children
+// (vox_children order): per column (i, j) of vox_column the front child composited over the back
+// one, c_f + (1 − α_f)·c_b, the 4 columns averaged in vox_column's (j, i) order.
+inline float4 vox_aniso_parent(int dir, const float4 ch[8]) {
+  int axis = dir / 2, f = dir & 1;
+  // Child index steps: along the compositing axis, and along the column axes i and j.
+  int along = axis == 0 ? 1 : (axis == 1 ? 2 : 4);
+  int si = axis == 0 ? 2 : 1, sj = axis == 2 ? 2 : 4;
   float4 sum = (float4)(0.0f);
+#pragma unroll
   for (int j = 0; j < 2; ++j)
+#pragma unroll
     for (int i = 0; i < 2; ++i) {
-      size_t f, k;
-      vox_column(dir, i, j, b, nc, &f, &k);
-      float4 front = child[f];
-      sum += front + (1.0f - front.w) * child[k];
+      int column = i * si + j * sj;
+      float4 front = ch[column + f * along], back = ch[column + (1 - f) * along];
+      sum += front + (1.0f - front.w) * back;
     }
-  aniso[vox_aniso_offset(N, level, dir) + v] = sum * 0.25f;
+  return sum * 0.25f;
+}
+
+// Parent voxels of level 1, all 6 directions, from the isotropic level 0: one work-item per parent
+// reads its 8 children once and writes the 6 directional volumes.
+kernel void vct_mip_anisotropic_first(int N, global const float4* iso, global float4* aniso) {
+  int n = N >> 1;
+  size_t v = get_global_id(0);
+  if (v >= (size_t)n * n * n) return;
+  float4 ch[8];
+  vox_children(iso, N, vox_cell(v, n), ch);
+#pragma unroll
+  for (int dir = 0; dir < 6; ++dir) aniso[vox_aniso_offset(N, 1, dir) + v] = vox_aniso_parent(dir, ch);
+}
+
+// Parent voxels of `level` (≥ 2), all 6 directions, each from the matching directional volume of
+// level − 1; one work-item per parent (the direction a compile-time constant in each unrolled step).
+kernel void vct_mip_anisotropic(int N, int level, global float4* aniso) {
+  int n = N >> level;
+  size_t v = get_global_id(0);
+  if (v >= (size_t)n * n * n) return;
+  int3 cell = vox_cell(v, n);
+#pragma unroll
+  for (int dir = 0; dir < 6; ++dir) {
+    float4 ch[8];
+    vox_children((global const float4*)aniso + vox_aniso_offset(N, level - 1, dir), 2 * n, cell, ch);
+    aniso[vox_aniso_offset(N, level, dir) + v] = vox_aniso_parent(dir, ch);
+  }
 }
 
 // lobe = (k0, k1) of voxel_types.h.

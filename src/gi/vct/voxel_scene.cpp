@@ -56,6 +56,7 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl");
   inject_ = lightProgram_.kernel("vct_inject");
   mipIso_ = lightProgram_.kernel("vct_mip_isotropic");
+  mipAnisoFirst_ = lightProgram_.kernel("vct_mip_anisotropic_first");
   mipAniso_ = lightProgram_.kernel("vct_mip_anisotropic");
   shProject_ = lightProgram_.kernel("vct_sh_project");
   shMipIso_ = lightProgram_.kernel("vct_mip_sh_isotropic");
@@ -95,9 +96,12 @@ void VoxelScene::buildMips(bool anisotropic) {
   }
   for (int l = 1; l < grid_.levels; ++l) {
     size_t cells = voxelCount() >> (3 * l);
-    if (anisotropic) {
-      mipAniso_.args(N, l, iso_, aniso_);
-      ctx_.launch(mipAniso_, cl::NDRange::d1(cl::roundUp(6 * cells, 64), 64), "vct: mips (anisotropic)");
+    if (anisotropic && l == 1) {
+      mipAnisoFirst_.args(N, iso_, aniso_);
+      ctx_.launch(mipAnisoFirst_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (anisotropic)");
+    } else if (anisotropic) {
+      mipAniso_.args(N, l, aniso_);
+      ctx_.launch(mipAniso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (anisotropic)");
     } else {
       mipIso_.args(N, l, iso_);
       ctx_.launch(mipIso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (isotropic)");

@@ -61,7 +61,7 @@ private:
   cl::Context& ctx_;
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
-  cl::Kernel clear_, voxelize_, inject_, mipIso_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
+  cl::Kernel clear_, voxelize_, inject_, mipIso_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
   cl::Buffer instanceEmits_, acc_, iso_, aniso_, sh_, shAniso_;
 
   uint64_t anisoBytes() const;  // the 6 directional volumes of levels ≥ 1, float4 each
