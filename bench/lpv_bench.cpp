@@ -6,12 +6,14 @@
 // <= 6 ms, lookup <= 2 ms, 3 cascades of 32³ all together <= 25 ms.
 //
 //   build/lpv_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 9] [--large]
-//                   [--falloff] [--propagation]
+//                   [--falloff] [--propagation] [--config I] [--passes all|propagate|lookup]
 //   (--large adds 64³ cascades and a 128³ grid with 128 iterations; --falloff only prints how
 //   far light travels: the on-axis irradiance above one cosine-lobe cell in an empty grid after
 //   `resolution` iterations, against the exact Φ/(π r²) of that emitter, at 32³, 64³ and 128³;
 //   --propagation only times the propagation of one 16³ and one 32³ grid of random light and
-//   blockers: device ms and process CPU ms per step, median of --frames runs of `resolution` steps)
+//   blockers: device ms and process CPU ms per step, median of --frames runs of `resolution` steps;
+//   --config I times only the I-th configuration of the list below, 0-based; --passes times the
+//   propagation and/or the lookup alone, repeated on one rendered frame: timePasses)
 #include <sys/resource.h>
 
 #include <cstdio>
@@ -91,12 +93,66 @@ void timePropagation(cl::Context& ctx, int n, int runs) {
   }
 }
 
+// The passes one by one on one rendered Sponza frame (its G-buffer and RSM), each repeated `runs`
+// times after a warm-up: median device ms (profiler) and process CPU ms per repetition. One 32³
+// grid over the scene and 3 cascades of 32³ (finest edge = a quarter of the bounds' longest edge,
+// centred on the camera). Less noisy than whole frames: nothing else runs between the launches.
+void timePasses(cl::Context& ctx, const Scene& scene, const timing::FrameSettings& a, const std::string& which) {
+  RenderSettings rs;
+  rs.width = a.width;
+  rs.height = a.height;
+  rs.technique = "lpv";
+  rs.sets = {"lpv.cascades=0", "rsm.resolution=512", "lpv.rsm_size=256"};
+  Renderer r(ctx, scene, rs);
+  r.renderFrame();
+  const GBuffer& g = r.gbuffer();
+  glm::vec3 camera(g.view.eye[0], g.view.eye[1], g.view.eye[2]);
+  glm::vec3 e = scene.bounds.extent();
+  cl::Buffer out(ctx, size_t(g.width) * g.height * 16, CL_MEM_READ_WRITE, "lpv bench output");
+  for (int cascades : {0, 3}) {
+    const int n = 32;
+    LpvVolume v(ctx, n, std::max(cascades, 1));
+    auto layout = lpvCascadeLayout(scene.bounds, camera, n, cascades, std::max({e.x, e.y, e.z}) / 4.0f);
+    auto runPass = [&](const char* what, auto&& pass) {
+      std::vector<double> device, cpu;
+      for (int i = 0; i < a.frames + 1; ++i) {  // the first run warms up
+        ctx.finish();
+        ctx.profiler().discard();
+        double c0 = processCpuMs();
+        pass();
+        double ms = 0.0;
+        for (auto& [name, t] : ctx.profiler().collect()) ms += t;
+        double c1 = processCpuMs();
+        if (i == 0) continue;
+        device.push_back(ms);
+        cpu.push_back(c1 - c0);
+      }
+      std::printf("  %-44s %8.3f ms device, %8.3f ms CPU\n", what, timing::median(device), timing::median(cpu));
+    };
+    std::printf("%s:\n", cascades ? "3 cascades of 32^3" : "one 32^3 grid over the scene");
+    auto fill = [&] {
+      v.begin(layout, lpvInjectionFixedScale(scene, r.rsms()));
+      for (const ReflectiveShadowMap& m : r.rsms()) {
+        v.inject(m.position, m.normal, m.flux, m.view.width, 2, 0.5f);
+        v.addGeometryRsm(m.view, m.position, m.normal, m.view.width);
+      }
+      v.addGeometryCamera(g);
+      v.resolve(true);
+    };
+    runPass("inject + geometry + resolve", fill);
+    if (which != "lookup") runPass("propagate, 32 steps with blocking", [&] { v.propagate(n, true); });
+    if (which != "propagate") runPass("lookup (lookup grid + per pixel)", [&] { v.lookup(g, cascades > 0, out); });
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   timing::FrameSettings a;
   std::string sceneName = "scenes/sponza.json";
   bool large = false, falloff = false, propagation = false;
+  std::string passes;  // --passes all | propagate | lookup
+  int onlyConfig = -1;
   for (int i = 1; i < argc; ++i) {
     std::string k = argv[i];
     auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
@@ -107,8 +163,10 @@ int main(int argc, char** argv) {
     else if (k == "--large") large = true;
     else if (k == "--falloff") falloff = true;
     else if (k == "--propagation") propagation = true;
+    else if (k == "--passes") passes = next();
+    else if (k == "--config") onlyConfig = std::stoi(next());
     else {
-      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large] [--falloff] [--propagation]\n");
+      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large] [--falloff] [--propagation] [--config I] [--passes all|propagate|lookup]\n");
       return 2;
     }
   }
@@ -131,6 +189,12 @@ int main(int argc, char** argv) {
       std::printf("(%s not loadable: %s; using the built-in Cornell box)\n", sceneName.c_str(), e.what());
       scene = makeCornellBox();
     }
+    if (!passes.empty()) {
+      std::printf("lpv passes alone: %s, %dx%d, %s, median of %d runs\n", scene.name.c_str(), a.width, a.height,
+                  ctx.device().name.c_str(), a.frames);
+      timePasses(ctx, scene, a, passes);
+      return 0;
+    }
     std::printf("lpv bench: %s, %dx%d, %s, median of %d frames after %d warm-up\n", scene.name.c_str(), a.width,
                 a.height, ctx.device().name.c_str(), a.frames, a.warmup);
     struct Config {
@@ -147,7 +211,9 @@ int main(int argc, char** argv) {
       configs.push_back({64, 3, 512, "3 cascades of 64^3, 64 iterations"});
       configs.push_back({128, 0, 512, "one 128^3 grid, 128 iterations"});
     }
-    for (const Config& c : configs) {
+    for (size_t i = 0; i < configs.size(); ++i) {
+      if (onlyConfig >= 0 && size_t(onlyConfig) != i) continue;
+      const Config& c = configs[i];
       std::vector<std::string> sets = {"lpv.resolution=" + std::to_string(c.resolution),
                                        "lpv.cascades=" + std::to_string(c.cascades),
                                        "rsm.resolution=" + std::to_string(c.rsm), "lpv.rsm_size=256"};

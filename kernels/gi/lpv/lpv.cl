@@ -451,12 +451,6 @@ kernel void lpv_lookup_grid(global const float* accumulated, constant float4* ca
   lookupGrid[(k * 3 + ch) * LPV_CELLS + cell] = conv * (float4)(c[0], c[LPV_STRIDE], c[2 * LPV_STRIDE], c[3 * LPV_STRIDE]);
 }
 
-#if GI_VW == 1
-#define LPV_LANE0(v) (v)
-#else
-#define LPV_LANE0(v) ((v).s0)
-#endif
-
 // The lookup grid is a 3D image (LPV_N × LPV_N × LPV_N·3·cascades, the slabs stacked along z) on
 // devices that filter images in hardware, a float4 buffer otherwise. The sample coordinates are
 // clamped to the slab's border cell centres, so the linear filter never mixes two slabs.
@@ -467,20 +461,25 @@ constant sampler_t lpv_trilinear_sampler = CLK_NORMALIZED_COORDS_FALSE | CLK_ADD
 #define LPV_LOOKUP_GRID global const float4*
 #endif
 
-// Trilinear interpolation over the 8 corners c[corner·4 + coefficient] (corner bits x, y, z).
-inline void lpv_trilinear(const floatV* c, floatV fx, floatV fy, floatV fz, floatV* q) {
-#pragma unroll
-  for (int i = 0; i < 4; ++i) {
-    floatV x00 = mix(c[i], c[4 + i], fx), x10 = mix(c[8 + i], c[12 + i], fx);
-    floatV x01 = mix(c[16 + i], c[20 + i], fx), x11 = mix(c[24 + i], c[28 + i], fx);
-    q[i] = mix(mix(x00, x10, fy), mix(x01, x11, fy), fz);
-  }
+// The smallest lane of v.
+inline int lpv_min_lane(intV v) {
+#if GI_VW == 1
+  return v;
+#else
+#if GI_VW == 16
+  int8 v8 = min(v.lo, v.hi);
+#else
+  int8 v8 = v;
+#endif
+  int4 v4 = min(v8.lo, v8.hi);
+  int2 v2 = min(v4.lo, v4.hi);
+  return min(v2.x, v2.y);
+#endif
 }
 
 // Irradiance (W/m² per channel) of GI_VW pixels at p with geometric normal ng and shading normal n
 // from cascade k (per lane): trilinear over cell centres at p + ½ cell along ng (clamped at the
-// grid's border cells) in the lookup grid, E = q0 − q·n. When all lanes read the same 8 cells
-// (the common case: cells span many pixels) the corners are loaded once for all lanes.
+// grid's border cells) in the lookup grid, E = Σ_corners weight · (q0 − q·n).
 inline void cascade_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, intV k, float3V p, float3V ng,
                                float3V n, floatV* e) {
   floatV ox = 0.0f, oy = 0.0f, oz = 0.0f, s = 1.0f;
@@ -521,31 +520,33 @@ inline void cascade_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, 
   intV cx = min(convert_intV(floor(ux)), LPV_N - 2), cy = min(convert_intV(floor(uy)), LPV_N - 2),
        cz = min(convert_intV(floor(uz)), LPV_N - 2);
   floatV fx = ux - convert_floatV(cx), fy = uy - convert_floatV(cy), fz = uz - convert_floatV(cz);
-  intV cell = k * (3 * LPV_CELLS) + (cz * LPV_N + cy) * LPV_N + cx;
-  bool shared = GI_ALL(cell == LPV_LANE0(cell));
+  floatV gx = 1.0f - fx, gy = 1.0f - fy, gz = 1.0f - fz;
+  const floatV weight[8] = {gx * gy * gz, fx * gy * gz, gx * fy * gz, fx * fy * gz,
+                            gx * gy * fz, fx * gy * fz, gx * fy * fz, fx * fy * fz};  // corner bits x, y, z
   const int corner[8] = {0, 1, LPV_N, LPV_N + 1, LPV_N * LPV_N, LPV_N * LPV_N + 1, LPV_N * LPV_N + LPV_N,
                          LPV_N * LPV_N + LPV_N + 1};
+  intV cell = k * (3 * LPV_CELLS) + (cz * LPV_N + cy) * LPV_N + cx;  // the lower corner cell, channel 0
+  e[0] = e[1] = e[2] = 0.0f;
+  // Each distinct lower corner cell among the lanes once, in ascending order: its 8 corners are
+  // loaded once (uniform loads) and used by the lanes that interpolate from it — usually all of
+  // them, as a cell spans many pixels. No per-lane gathers; every lane's sum is the same
+  // expression in the same order whichever lanes share its cell.
+  intV todo = cell >= 0;  // all lanes
+  while (GI_ANY(todo)) {
+    int base = lpv_min_lane(GI_SEL((intV)(INT_MAX), cell, todo));
+    intV mine = cell == base;
+    todo = todo && !mine;
 #pragma unroll
-  for (int ch = 0; ch < 3; ++ch) {
-    floatV c[32], q[4];
-    if (shared) {
-      global const float4* g = grid + LPV_LANE0(cell) + ch * LPV_CELLS;
+    for (int ch = 0; ch < 3; ++ch) {
+      global const float4* g = grid + base + ch * LPV_CELLS;
+      floatV sum = 0.0f;
 #pragma unroll
       for (int i = 0; i < 8; ++i) {
-        float4 v = g[corner[i]];
-        c[4 * i] = v.x;
-        c[4 * i + 1] = v.y;
-        c[4 * i + 2] = v.z;
-        c[4 * i + 3] = v.w;
+        float4 q = g[corner[i]];
+        sum += weight[i] * (q.x - q.y * n.y - q.z * n.z - q.w * n.x);  // light arriving travels along −n
       }
-    } else {
-#pragma unroll
-      for (int i = 0; i < 8; ++i)
-        GI_GATHER_SPAN4(float, (global const float*)grid, (cell + ch * LPV_CELLS + corner[i]) * 4, c[4 * i],
-                        c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]);
+      e[ch] = GI_SEL(e[ch], sum, mine);
     }
-    lpv_trilinear(c, fx, fy, fz, q);
-    e[ch] = q[0] - q[1] * n.y - q[2] * n.z - q[3] * n.x;  // light arriving travels along −n
   }
 #endif
 }
@@ -573,10 +574,18 @@ kernel void lpv_lookup(int width, int height, global const float* position, glob
   intV pixel = y * width + min(x, width - 1);  // lanes past the row's end re-read its last pixel, not stored
   float3V p, ng, n, rho;
   floatV pw, unused;
-  GI_GATHER_AOS4(float, position, pixel, p.x, p.y, p.z, pw);
-  GI_GATHER_AOS4(float, geoNormal, pixel, ng.x, ng.y, ng.z, unused);
-  GI_GATHER_AOS4(float, normal, pixel, n.x, n.y, n.z, unused);
-  GI_GATHER_AOS4(float, albedo, pixel, rho.x, rho.y, rho.z, unused);
+  if (x0 + GI_VW <= width) {  // GI_VW consecutive pixels: contiguous loads
+    size_t at = ((size_t)y * width + x0) * 4;
+    GI_AOS4_LOAD(position + at, p.x, p.y, p.z, pw);
+    GI_AOS4_LOAD(geoNormal + at, ng.x, ng.y, ng.z, unused);
+    GI_AOS4_LOAD(normal + at, n.x, n.y, n.z, unused);
+    GI_AOS4_LOAD(albedo + at, rho.x, rho.y, rho.z, unused);
+  } else {
+    GI_GATHER_AOS4(float, position, pixel, p.x, p.y, p.z, pw);
+    GI_GATHER_AOS4(float, geoNormal, pixel, ng.x, ng.y, ng.z, unused);
+    GI_GATHER_AOS4(float, normal, pixel, n.x, n.y, n.z, unused);
+    GI_GATHER_AOS4(float, albedo, pixel, rho.x, rho.y, rho.z, unused);
+  }
   intV covered = pw > 0.0f;
   p = selV(f3v(0.0f, 0.0f, 0.0f), p, covered);  // empty pixels: any finite point, result dropped
   intV k = 0;

@@ -251,7 +251,7 @@ void LpvVolume::propagate(int iterations, bool blocking) {
 
 void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out) {
   toLookupGrid_.args(accumulated_, layout_, lookupGrid_);
-  ctx_.launch(toLookupGrid_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: lookup");
+  ctx_.launch(toLookupGrid_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: lookup grid");
   if (storage_ == LpvLookupStorage::Image) {
     lookupImage_.copy(ctx_, lookupGrid_);
     lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
