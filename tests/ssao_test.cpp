@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <glm/gtc/type_ptr.hpp>
 
 #include "gi/ssao/ssao_technique.h"
 #include "render/renderer.h"
@@ -204,7 +205,14 @@ TEST(Ssao, KernelMatchesHostImplementation) {
   auto depth = download<float>(g.visibility.depth), direct = download<float>(r.directBuffer());
   auto kv = ssaoKernelVectors(st.samples);
   auto rot = ssaoRotations();
-  const float* M = g.view.view_proj;
+  // Camera space (x, y, depth) of ALGORITHMS.md's right-handed view space; the projection from
+  // the camera's matrices directly (not ssaoProjection, which the kernels use).
+  glm::mat4 view = glm::make_mat4(g.view.view), viewProj = glm::make_mat4(g.view.view_proj);
+  auto toCamera = [&](glm::vec3 v, float w) {
+    glm::vec4 c = view * glm::vec4(v, w);
+    return glm::vec3(c.x, c.y, -c.z);
+  };
+  glm::mat4 invView = glm::inverse(view);
   auto v3 = [](const std::vector<float>& b, int i) { return glm::vec3(b[4 * i], b[4 * i + 1], b[4 * i + 2]); };
   int exact = 0, surfaces = 0;
   for (int y = 0; y < H; ++y)
@@ -215,8 +223,9 @@ TEST(Ssao, KernelMatchesHostImplementation) {
         continue;
       }
       ++surfaces;
-      glm::vec3 P = v3(pos, p), ng = v3(gn, p), n = v3(sn, p);
-      // orthonormal_basis (Duff et al.), rotated by the tile's angle.
+      // P from the G-buffer position (the kernel reconstructs it from the depth).
+      glm::vec3 Pw = v3(pos, p), n = v3(sn, p), P = toCamera(Pw, 1.0f), ng = toCamera(v3(gn, p), 0.0f);
+      // orthonormal_basis (Duff et al.) of the camera-space geometric normal, rotated by the tile's angle.
       float sgn = ng.z >= 0 ? 1.0f : -1.0f, a = -1.0f / (sgn + ng.z), c = ng.x * ng.y * a;
       glm::vec3 t0(1 + sgn * ng.x * ng.x * a, sgn * c, -sgn * ng.x), b0(c, sgn + ng.y * ng.y * a, -ng.y);
       float rc = rot[2 * ((y & 3) * 4 + (x & 3))], rs = rot[2 * ((y & 3) * 4 + (x & 3)) + 1];
@@ -226,25 +235,26 @@ TEST(Ssao, KernelMatchesHostImplementation) {
       glm::vec3 E(0.0f);
       for (int i = 0; i < st.samples; ++i) {
         glm::vec3 S = P + st.radius * (kv[4 * i] * tt + kv[4 * i + 1] * bb + kv[4 * i + 2] * ng);
-        float cx = M[0] * S.x + M[4] * S.y + M[8] * S.z + M[12];
-        float cy = M[1] * S.x + M[5] * S.y + M[9] * S.z + M[13];
-        float cw = M[3] * S.x + M[7] * S.y + M[11] * S.z + M[15];
-        if (cw <= 0) continue;
-        float sx = (cx / cw * 0.5f + 0.5f) * W, sy = (0.5f - cy / cw * 0.5f) * H;
+        if (S.z <= 0) continue;
+        glm::vec4 clip = viewProj * (invView * glm::vec4(S.x, S.y, -S.z, 1.0f));
+        float sx = (clip.x / clip.w * 0.5f + 0.5f) * W, sy = (0.5f - clip.y / clip.w * 0.5f) * H;
         if (!(sx >= 0 && sx < W && sy >= 0 && sy < H)) continue;
         int q = int(sy) * W + int(sx);
         if (pos[4 * q + 3] == 0.0f) continue;
-        glm::vec3 Q = v3(pos, q);
-        if (!(glm::dot(S - Q, v3(gn, q)) < -st.bias)) continue;
+        // Occluded when S lies more than the bias behind the tangent plane of the surface seen at q
+        // (G-buffer position and geometric normal, which faces the camera).
+        glm::vec3 Q = toCamera(v3(pos, q), 1.0f), nq = toCamera(v3(gn, q), 0.0f);
+        if (!(glm::dot(S - Q, nq) < -st.bias)) continue;
         if (!(std::fabs(depth[q] - depth[p]) < st.radius)) continue;
         ++occluded;
-        glm::vec3 v = Q - P;
+        glm::vec3 v = v3(pos, q) - Pw;
         float d2 = glm::dot(v, v), invD = 1.0f / std::sqrt(std::max(d2, 1e-30f));
         float cosR = std::max(glm::dot(n, v) * invD, 0.0f), cosS = std::max(-glm::dot(v3(sn, q), v) * invD, 0.0f);
         E += v3(direct, q) * (As * cosS * cosR / std::max(d2, d2min));
       }
       float occH = float(occluded) / st.samples;
-      // Rounding (FMA contraction) may flip a sample lying exactly on a decision boundary.
+      // Rounding (FMA contraction, the kernel's depth-reconstructed P and half-float plane
+      // gradients) may flip a sample lying on a decision boundary.
       ASSERT_LE(std::fabs(occK[p] - occH), 1.5f / st.samples) << "pixel " << x << "," << y;
       if (occK[p] != occH) continue;
       ++exact;

@@ -2,7 +2,8 @@
 // screen-space one-bounce colour bleeding (seed 003 eq. 3.5, after Ritschel et al. 2009).
 // ALGORITHMS.md §6; host side and choices: src/gi/ssao/ssao_technique.cpp, docs/techniques/ssao.md.
 //
-// ssao_occlusion, per camera pixel with surface point P, geometric normal n_g, shading normal n:
+// ssao_occlusion, per camera pixel with surface point P (reconstructed from the depth buffer),
+// geometric normal n_g, shading normal n:
 //   GI_SSAO_SAMPLES points S_i = P + R·(rotated tangent-space kernel vector k_i) in the hemisphere
 //   around n_g. S_i is projected to pixel q; the surface seen there (position Q, geometric normal
 //   n_q facing the camera) occludes S_i when S_i lies behind the tangent plane of Q by more than
@@ -31,8 +32,10 @@
 // How (PERFORMANCE_FACTS.md): one work-item handles GI_VW adjacent pixels of a row as lanes of
 // floatV (16 on CPU devices, 1 on GPUs); every per-pixel branch of the formulas above is a lane
 // mask, the sample loop has a constant trip count and is unrolled, and the surfaces seen at the
-// projected samples are gathered lane by lane. A group cut by the right image border reads its
-// last pixel repeatedly and stores only its valid lanes.
+// projected samples are gathered lane by lane — one 8-byte depth-plane record each
+// (ssao_depth_planes), in camera space, so that a sample costs one division to project and the
+// records a work-group touches stay in the L2 cache. A group cut by the right image border reads
+// its last pixel repeatedly and stores only its valid lanes.
 
 // Loads GI_VW float4 of `plane` starting at pixel i into four floatV (valid lanes, the rest repeat).
 #define SSAO_LOAD4(plane, i, valid, X, Y, Z, W)                                   \
@@ -66,110 +69,138 @@ inline void ssao_store1(global float* plane, int i, int valid, floatV v) {
   }
 }
 
-// What the occlusion test of a sample needs about the surface seen at a pixel, in one float4 so
-// that a sample costs one gather: the octahedral coordinates of its geometric normal n (seed 004
-// Algorithm 1; decoded exactly enough in float), its tangent plane offset n·Q with the decoded n,
-// and its view depth. Background: depth +inf (fails every range check).
-inline float2 ssao_oct_encode(float3 v) {
-  float2 p = v.xy / (fabs(v.x) + fabs(v.y) + fabs(v.z));
-  if (v.z < 0.0f) p = (float2)((1.0f - fabs(p.y)) * (p.x >= 0.0f ? 1.0f : -1.0f), (1.0f - fabs(p.x)) * (p.y >= 0.0f ? 1.0f : -1.0f));
-  return p;
+// Camera space here: c = (x_view, y_view, depth) with depth = −z_view (the G-buffer's linear view
+// depth); a point projects to the pixel coordinates sx = cx + fx·c.x/c.z, sy = cy − fy·c.y/c.z
+// (`projection` = (fx, fy, cx, cy), derived on the host from the camera's matrices).
+
+// The relative screen-space gradients of 1/depth are stored as IEEE half floats (bit patterns: the
+// kernels do not need cl_khr_fp16; ssao_half_value reads the half in the upper 16 bits of h). Magnitudes below the smallest normal half (6.1e-5 per pixel:
+// a relative depth change under 5e-5 within the 0.71 px a sample is extrapolated) become 0, above
+// 65504 they are clamped; rounding to nearest.
+inline uint ssao_half_bits(float v) {
+  float a = fmin(fabs(v), 65504.0f);
+  uint h = a < 6.103515625e-05f ? 0u : (as_uint(a) - (112u << 23) + 0x1000u) >> 13;
+  return h | ((as_uint(v) >> 16) & 0x8000u);
 }
 
-inline void ssao_oct_decodeV(floatV ox, floatV oy, floatV* nx, floatV* ny, floatV* nz) {
-  floatV z = 1.0f - fabs(ox) - fabs(oy);
-  floatV one = (floatV)(1.0f), minusOne = (floatV)(-1.0f);
-  intV lower = z < 0.0f;
-  floatV x = GI_SEL(ox, (1.0f - fabs(oy)) * GI_SEL(minusOne, one, ox >= 0.0f), lower);
-  floatV y = GI_SEL(oy, (1.0f - fabs(ox)) * GI_SEL(minusOne, one, oy >= 0.0f), lower);
-  floatV inv = 1.0f / sqrt(x * x + y * y + z * z);
-  *nx = x * inv;
-  *ny = y * inv;
-  *nz = z * inv;
+inline floatV ssao_half_value(uintV h) {
+  // Sign in place, exponent and mantissa moved to a float's, then the exponent rebias 15 -> 127
+  // by an exact multiplication.
+  return as_floatV(((h >> 3) & 0x0fffe000u) | (h & 0x80000000u)) * 0x1p112f;
 }
 
-// One pixel per work-item and no loop: PoCL vectorizes it across work-items.
-kernel void ssao_planes(int count, global const float4* position, global const float4* geoNormal,
-                        global const float* depth, global float4* planes) {
-  int i = get_global_id(0);
-  if (i >= count) return;
-  float4 p = position[i];
-  float2 o = ssao_oct_encode(geoNormal[i].xyz);
-  floatV nx, ny, nz;
-  ssao_oct_decodeV((floatV)(o.x), (floatV)(o.y), &nx, &ny, &nz);  // the n the samples will see
-  float t[3 * GI_VW];
-  vstoreV(nx, 0, t);
-  vstoreV(ny, 1, t);
-  vstoreV(nz, 2, t);
-  float3 n = (float3)(t[0], t[GI_VW], t[2 * GI_VW]);
-  planes[i] = p.w != 0.0f ? (float4)(o, dot(n, p.xyz), depth[i]) : (float4)(0.0f, 0.0f, 0.0f, INFINITY);
+// What the occlusion test of a sample needs about the surface seen at pixel q, in 8 bytes so that a
+// sample costs one 64-bit load and the records of the sample window stay in the L2 cache:
+//   word 0: A = 1/depth at q's centre (0 on the background: fails every test below);
+//   word 1: the half floats (g_x, g_y), the screen-space gradient of 1/depth over the tangent plane
+//           of q's surface (geometric normal n), relative to A.
+// 1/depth is affine in screen coordinates over a plane (perspective-correct interpolation), so
+//   1/depth of that plane at pixel coordinates s = A·(1 + g·(s − centre of q))   exactly;
+// for the plane n·c = w: 1/depth(s) = n·r(s)/w with the ray r(s) = ((sx − cx)/fx, (cy − sy)/fy, 1),
+// hence g = (n.x/fx, −n.y/fy)/(n·r(q)). One pixel per work-item and no loop: PoCL vectorizes it.
+kernel void ssao_depth_planes(int width, int height, GiView camera, float4 projection, global const float* depth,
+                              global const float4* geoNormal, global uint2* records) {
+  int x = get_global_id(0), y = get_global_id(1);
+  if (x >= width || y >= height) return;
+  int i = y * width + x;
+  float z = depth[i];
+  float3 w = geoNormal[i].xyz;
+  const float* V = camera.view;
+  float nx = V[0] * w.x + V[4] * w.y + V[8] * w.z, ny = V[1] * w.x + V[5] * w.y + V[9] * w.z;
+  float nz = -(V[2] * w.x + V[6] * w.y + V[10] * w.z);
+  float rx = ((float)x + 0.5f - projection.z) / projection.x, ry = (projection.w - (float)y - 0.5f) / projection.y;
+  float nr = nx * rx + ny * ry + nz;
+  nr = copysign(fmax(fabs(nr), 1e-12f), nr);  // a plane seen edge-on: clamped gradients
+  uint g = ssao_half_bits(nx / (projection.x * nr)) | (ssao_half_bits(-ny / (projection.y * nr)) << 16);
+  records[i] = isfinite(z) ? (uint2)(as_uint(1.0f / z), g) : (uint2)(0u, 0u);
 }
 
 // kernelVectors: GI_SSAO_SAMPLES float4 (tangent-space x, y, z along n_g, already scaled by the
 // length factor lerp(0.1, 1, (i/N)²)); rotations: 16 float2 (cos, sin) for the 4×4 noise tile;
-// planes: ssao_planes().
-kernel void ssao_occlusion(int width, int height, GiView camera, global const float4* position,
-                           global const float4* geoNormal, global const float4* normal,
-                           global const float4* planes, global const float* depth, global const float4* direct,
-                           constant float4* kernelVectors, constant float2* rotations, float radius,
-                           float bias, int bleeding, global float* occlusionOut,
-                           global float4* irradianceOut) {
+// records: ssao_depth_planes(). position, normal and direct are read only with bleeding on.
+kernel void ssao_occlusion(int width, int height, GiView camera, float4 projection, global const float* depth,
+                           global const float4* geoNormal, global const uint2* records,
+                           constant float4* kernelVectors, constant float2* rotations, float radius, float bias,
+                           int bleeding, global const float4* position, global const float4* normal,
+                           global const float4* direct, global float* occlusionOut, global float4* irradianceOut) {
   int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
   if (px0 >= width || y >= height) return;
   int i0 = y * width + px0, valid = min(GI_VW, width - px0);
   float tmp[4 * GI_VW];
-  floatV Px, Py, Pz, Pw, gx, gy, gz, nx, ny, nz, unused;
-  SSAO_LOAD4(position, i0, valid, Px, Py, Pz, Pw)
-  SSAO_LOAD4(geoNormal, i0, valid, gx, gy, gz, unused)
-  SSAO_LOAD4(normal, i0, valid, nx, ny, nz, unused)
+  const float fx = projection.x, fy = projection.y, cx = projection.z, cy = projection.w;
   floatV zP = ssao_load1(depth, i0, valid);
-  intV surface = Pw != 0.0f;
-  // orthonormal_basis() (Duff et al. 2017) lane-wise.
+  intV surface = isfinite(zP);
+  zP = GI_SEL((floatV)(0.0f), zP, surface);  // background lanes: finite arithmetic, masked below
+  // The geometric normal in camera space.
+  floatV wx, wy, wz, unused;
+  SSAO_LOAD4(geoNormal, i0, valid, wx, wy, wz, unused)
+  const float* V = camera.view;
+  floatV gx = V[0] * wx + V[4] * wy + V[8] * wz, gy = V[1] * wx + V[5] * wy + V[9] * wz;
+  floatV gz = -(V[2] * wx + V[6] * wy + V[10] * wz);
+  // orthonormal_basis() (Duff et al. 2017) lane-wise, rotated by the pixel's entry of the 4×4 tile.
   floatV s = GI_SEL((floatV)(-1.0f), (floatV)(1.0f), gz >= 0.0f);
   floatV a = -1.0f / (s + gz), c = gx * gy * a;
   floatV t0x = 1.0f + s * gx * gx * a, t0y = s * c, t0z = -s * gx;
   floatV b0x = c, b0y = s + gy * gy * a, b0z = -gy;
-  // The pixel's entry of the 4×4 rotation tile.
   intV r = ((y & 3) * 4 + ((px0 + GI_LANES) & 3)) * 2;
   constant float* rf = (constant float*)rotations;
   floatV rc = GI_GATHER(floatV, rf, r), rs = GI_GATHER(floatV, rf, r + 1);
-  floatV tx = rc * t0x + rs * b0x, ty = rc * t0y + rs * b0y, tz = rc * t0z + rs * b0z;
-  floatV bx = rc * b0x - rs * t0x, by = rc * b0y - rs * t0y, bz = rc * b0z - rs * t0z;
+  // Everything below in scaled camera coordinates (x·fx, −y·fy, depth), so that a point projects
+  // to s = (cx, cy) + (x', y')/depth, with the radius folded into the frame vectors.
+  const float kx = fx * radius, ky = -fy * radius;
+  floatV Tx = kx * (rc * t0x + rs * b0x), Ty = ky * (rc * t0y + rs * b0y), Tz = radius * (rc * t0z + rs * b0z);
+  floatV Bx = kx * (rc * b0x - rs * t0x), By = ky * (rc * b0y - rs * t0y), Bz = radius * (rc * b0z - rs * t0z);
+  floatV Nx = kx * gx, Ny = ky * gy, Nz = radius * gz;
+  floatV Px = zP * (convert_floatV(px0 + GI_LANES) + (0.5f - cx)), Py = zP * ((float)y + 0.5f - cy), Pz = zP;
+  const float W = (float)width, H = (float)height;
+  global const uint* rec = (global const uint*)records;
+  // Bleeding (eq. 3.5) in world space, from the G-buffer.
+  floatV Pwx = (floatV)(0.0f), Pwy = Pwx, Pwz = Pwx, nx = Pwx, ny = Pwx, nz = Pwx;
+  if (bleeding) {
+    SSAO_LOAD4(position, i0, valid, Pwx, Pwy, Pwz, unused)
+    SSAO_LOAD4(normal, i0, valid, nx, ny, nz, unused)
+  }
   const float As = GI_PI * radius * radius / (float)GI_SSAO_SAMPLES;
   const float d2min = radius * radius / (float)GI_SSAO_SAMPLES;  // A_s/π
-  const float* M = camera.view_proj;
-  const float W = (float)width, H = (float)height;
   global const float* pos = (global const float*)position;
-  global const float* pl = (global const float*)planes;
   global const float* nrm = (global const float*)normal;
   global const float* dir = (global const float*)direct;
   floatV occluded = (floatV)(0.0f), Ex = (floatV)(0.0f), Ey = (floatV)(0.0f), Ez = (floatV)(0.0f);
 #pragma unroll
   for (int i = 0; i < GI_SSAO_SAMPLES; ++i) {
     float4 k = kernelVectors[i];
-    floatV Sx = Px + radius * (k.x * tx + k.y * bx + k.z * gx);
-    floatV Sy = Py + radius * (k.x * ty + k.y * by + k.z * gy);
-    floatV Sz = Pz + radius * (k.x * tz + k.y * bz + k.z * gz);
-    floatV cx = M[0] * Sx + M[4] * Sy + M[8] * Sz + M[12];
-    floatV cy = M[1] * Sx + M[5] * Sy + M[9] * Sz + M[13];
-    floatV cw = M[3] * Sx + M[7] * Sy + M[11] * Sz + M[15];
-    floatV sx = (cx / cw * 0.5f + 0.5f) * W, sy = (0.5f - cy / cw * 0.5f) * H;
-    // cw <= 0: behind the camera, no information; outside the image likewise.
-    intV ok = surface & (cw > 0.0f) & (sx >= 0.0f) & (sx < W) & (sy >= 0.0f) & (sy < H);
-    if (!GI_ANY(ok)) continue;
-    intV q = GI_SEL((intV)(0), convert_intV(GI_SEL((floatV)(0.0f), sy, ok)) * width +
-                                   convert_intV(GI_SEL((floatV)(0.0f), sx, ok)), ok);
-    intV q4 = q * 4;
-    floatV qx, qy, qz;
-    ssao_oct_decodeV(GI_GATHER(floatV, pl, q4), GI_GATHER(floatV, pl, q4 + 1), &qx, &qy, &qz);
-    floatV qd = GI_GATHER(floatV, pl, q4 + 2), zq = GI_GATHER(floatV, pl, q4 + 3);
-    // Background at q: its depth is infinite and fails the range check.
-    floatV behind = Sx * qx + Sy * qy + Sz * qz - qd;  // (S − Q) · n_q
-    intV occ = ok & (behind < -bias) & (fabs(zq - zP) < radius);
+    floatV Sx = Px + k.x * Tx + k.y * Bx + k.z * Nx;
+    floatV Sy = Py + k.x * Ty + k.y * By + k.z * Ny;
+    floatV Sz = Pz + k.x * Tz + k.y * Bz + k.z * Nz;
+    floatV inv = 1.0f / Sz;
+    floatV sx = cx + Sx * inv, sy = cy + Sy * inv;
+    // The sample's pixel (ix, iy) = floor(s) for s > −1 (truncation of s + 1, minus 1, the float
+    // clamped first so that the conversion is defined; NaN -> −1); off the image or at depth <= 0
+    // (behind the camera): no information, not occluded.
+    intV ix = convert_intV(fmin(fmax(sx + 1.0f, 0.0f), W + 1.0f)) - 1;
+    intV iy = convert_intV(fmin(fmax(sy + 1.0f, 0.0f), H + 1.0f)) - 1;
+    intV ok = (Sz > 0.0f) & (as_uintV(ix) < (uint)width) & (as_uintV(iy) < (uint)height);
+    intV q = GI_SEL((intV)(0), iy * width + ix, ok);
+    uintV w0, w1;
+    GI_GATHER_AOS2(uint, rec, q, w0, w1);
+    floatV qx = convert_floatV(ix), qy = convert_floatV(iy);
+    floatV A = as_floatV(w0), gqx = ssao_half_value(w1 << 16), gqy = ssao_half_value(w1);
+    floatV ux = qx + (0.5f - cx), uy = qy + (0.5f - cy);  // q's centre relative to the principal point
+    floatV invPlane = A * (1.0f + gqx * (sx - qx - 0.5f) + gqy * (sy - qy - 0.5f));
+    // The view ray through S meets q's plane at depth 1/invPlane; S lies e = depth_S·invPlane − 1
+    // (relative) behind it, which is a distance e·depth_q·|n·r(q)| = e/(A·|m|) along the plane's
+    // normal, m = (g_x·fx, −g_y·fy, 1 − g·u) being that normal over n·r(q). Occluded: more than
+    // the bias behind, e > bias·A·|m| (squared: no square root), and the range check
+    // |depth_q − depth_P| < R multiplied by A > 0 (the background, A = 0, fails both).
+    floatV mx = gqx * fx, my = gqy * fy, mz = 1.0f - gqx * ux - gqy * uy;
+    floatV e = Sz * invPlane - 1.0f, bA = bias * A;
+    intV occ = ok & (e > 0.0f) & (e * e > bA * bA * (mx * mx + my * my + mz * mz)) &
+               (fabs(1.0f - zP * A) < radius * A);
     occluded += GI_SEL((floatV)(0.0f), (floatV)(1.0f), occ);
     if (bleeding && GI_ANY(occ)) {
+      intV q4 = q * 4;
       floatV Qx = GI_GATHER(floatV, pos, q4), Qy = GI_GATHER(floatV, pos, q4 + 1), Qz = GI_GATHER(floatV, pos, q4 + 2);
-      floatV vx = Qx - Px, vy = Qy - Py, vz = Qz - Pz;
+      floatV vx = Qx - Pwx, vy = Qy - Pwy, vz = Qz - Pwz;
       floatV d2 = vx * vx + vy * vy + vz * vz;
       floatV invD = rsqrt(fmax(d2, 1e-30f));
       floatV cosR = fmax((nx * vx + ny * vy + nz * vz) * invD, 0.0f);
@@ -181,8 +212,13 @@ kernel void ssao_occlusion(int width, int height, GiView camera, global const fl
       Ez += GI_GATHER(floatV, dir, q4 + 2) * f;
     }
   }
+  // Background lanes ran with depth 0 (their samples may pass the tests): no occlusion, no light.
+  occluded = GI_SEL((floatV)(0.0f), occluded, surface);
   ssao_store1(occlusionOut, i0, valid, occluded / (float)GI_SSAO_SAMPLES);
   floatV zero = (floatV)(0.0f);
+  Ex = GI_SEL(zero, Ex, surface);
+  Ey = GI_SEL(zero, Ey, surface);
+  Ez = GI_SEL(zero, Ez, surface);
   SSAO_STORE4(irradianceOut, i0, valid, Ex, Ey, Ez, zero)
 }
 

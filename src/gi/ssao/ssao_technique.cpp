@@ -11,20 +11,37 @@
 #include "gi/ssao/ssao_technique.h"
 #include "util/halton.h"
 
+#include <glm/gtc/type_ptr.hpp>
+
 #include <cmath>
 #include <memory>
+
+#include "util/error.h"
 
 namespace gi {
 
 namespace {
 
-// Both kernels take the vector width's worth of adjacent pixels of a row per work-item.
-cl::NDRange pixelGroups(const cl::Context& ctx, const GBuffer& g) {
-  int vw = ctx.vectorWidth(), groups = (g.width + vw - 1) / vw;
+// Both kernels take `vw` adjacent pixels of a row per work-item.
+cl::NDRange pixelGroups(int vw, const GBuffer& g) {
+  int groups = (g.width + vw - 1) / vw;
   return cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(g.height, 8), 8, 8);
 }
 
 }  // namespace
+
+std::array<float, 4> ssaoProjection(const GiView& view) {
+  if (view.orthographic) throw Error("ssao: needs a perspective camera (this view is orthographic)");
+  glm::mat4 viewProj = glm::make_mat4(view.view_proj), viewMatrix = glm::make_mat4(view.view);
+  glm::mat4 proj = viewProj * glm::inverse(viewMatrix);
+  // glm::perspective (possibly off-centre): clip = (P00·x + P20·z, P11·y + P21·z, ., −z).
+  auto near = [](float a, float b) { return std::fabs(a - b) <= 1e-5f * std::max(1.0f, std::fabs(b)); };
+  if (!near(proj[1][0], 0) || !near(proj[0][1], 0) || !near(proj[3][0], 0) || !near(proj[3][1], 0) ||
+      !near(proj[2][3], -1) || !near(proj[3][3], 0) || !near(proj[0][3], 0) || !near(proj[1][3], 0))
+    throw Error("ssao: the camera's projection is not a perspective projection looking down -z");
+  float W = float(view.width), H = float(view.height);
+  return {0.5f * W * proj[0][0], 0.5f * H * proj[1][1], 0.5f * W * (1.0f - proj[2][0]), 0.5f * H * (1.0f + proj[2][1])};
+}
 
 std::vector<float> ssaoKernelVectors(int samples) {
   std::vector<float> v(size_t(samples) * 4);
@@ -69,7 +86,7 @@ SsaoSettings ssaoSettings(const ParamSet& p, const Bounds& bounds, bool upstream
 void SsaoTechnique::setup(const FrameResources& f) {
   size_t n = size_t(f.gbuffer.width) * f.gbuffer.height;
   rawOcclusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao raw occlusion");
-  planes_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "ssao tangent planes");
+  records_ = cl::Buffer(f.ctx, n * 8, CL_MEM_READ_WRITE, "ssao depth-plane records");
   rawIrradiance_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "ssao raw bleeding irradiance");
   occlusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao occlusion");
   rotations_ = f.ctx.upload(ssaoRotations(), "ssao rotations");
@@ -80,18 +97,20 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
     program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)}});
     occlusionKernel_ = program_.kernel("ssao_occlusion");
     blurKernel_ = program_.kernel("ssao_blur_compose");
-    planesKernel_ = program_.kernel("ssao_planes");
+    planesKernel_ = program_.kernel("ssao_depth_planes");
     kernelVectors_ = f.ctx.upload(ssaoKernelVectors(s.samples), "ssao kernel vectors");
     programSamples_ = s.samples;
   }
   const GBuffer& g = f.gbuffer;
-  int pixels = g.width * g.height;
-  planesKernel_.args(pixels, g.position, g.geoNormal, g.visibility.depth, planes_);
-  f.ctx.launch(planesKernel_, cl::NDRange::d1(cl::roundUp(pixels, 64), 64), "ssao: planes");
-  occlusionKernel_.args(g.width, g.height, g.view, g.position, g.geoNormal, g.normal, planes_, g.visibility.depth, f.direct,
-                        kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), rawOcclusion_,
-                        rawIrradiance_);
-  f.ctx.launch(occlusionKernel_, pixelGroups(f.ctx, g), "ssao: occlusion");
+  std::array<float, 4> p = ssaoProjection(g.view);
+  cl_float4 projection{{p[0], p[1], p[2], p[3]}};
+  planesKernel_.args(g.width, g.height, g.view, projection, g.visibility.depth, g.geoNormal, records_);
+  f.ctx.launch(planesKernel_, cl::NDRange::d2(cl::roundUp(g.width, 32), cl::roundUp(g.height, 4), 32, 4),
+               "ssao: depth planes");
+  occlusionKernel_.args(g.width, g.height, g.view, projection, g.visibility.depth, g.geoNormal, records_,
+                        kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), g.position, g.normal,
+                        f.direct, rawOcclusion_, rawIrradiance_);
+  f.ctx.launch(occlusionKernel_, pixelGroups(f.ctx.vectorWidth(), g), "ssao: occlusion");
 }
 
 void SsaoTechnique::blurComposePass(const FrameResources& f, const SsaoSettings& s, bool upstream,
@@ -99,7 +118,7 @@ void SsaoTechnique::blurComposePass(const FrameResources& f, const SsaoSettings&
   const GBuffer& g = f.gbuffer;
   blurKernel_.args(g.width, g.height, g.visibility.depth, g.albedo, rawOcclusion_, rawIrradiance_, s.blurTau,
                    int(upstream), int(s.bleeding), occlusion_, indirect);
-  f.ctx.launch(blurKernel_, pixelGroups(f.ctx, g), "ssao: blur + compose");
+  f.ctx.launch(blurKernel_, pixelGroups(f.ctx.vectorWidth(), g), "ssao: blur + compose");
 }
 
 void SsaoTechnique::render(const FrameResources& f, cl::Buffer& indirect) {

@@ -8,6 +8,7 @@
 // the bleeding on only when ssao is first in the chain (after a technique that already computes
 // the first bounce it would count it twice).
 #pragma once
+#include <array>
 #include <vector>
 
 #include "gi/technique.h"
@@ -29,6 +30,10 @@ struct SsaoSettings {
 std::vector<float> ssaoKernelVectors(int samples);
 // The 4×4 rotation tile: 16 (cos, sin) pairs, angle 2π·rank/16 with the rank of a 4×4 Bayer matrix.
 std::vector<float> ssaoRotations();
+// The camera's projection as the kernels use it, (fx, fy, cx, cy): a camera-space point (x, y, depth)
+// projects to pixel coordinates (cx + fx·x/depth, cy − fy·y/depth). Throws for a view that is not a
+// perspective projection looking down −z.
+std::array<float, 4> ssaoProjection(const GiView& view);
 // Reads the ssao.* parameters; radius and bias 0 = automatic from the scene bounds.
 SsaoSettings ssaoSettings(const ParamSet& params, const Bounds& sceneBounds, bool upstreamIndirect);
 
@@ -53,7 +58,7 @@ public:
 private:
   cl::Program program_;
   cl::Kernel occlusionKernel_, blurKernel_, planesKernel_;
-  cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_, planes_;
+  cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_, records_;
   int programSamples_ = 0;
 };
 
