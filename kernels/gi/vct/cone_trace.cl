@@ -145,7 +145,7 @@ kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* a
   size_t v = get_global_id(0);
   if (v >= (size_t)N * N * N) return;
   float4 own = direct[v];
-  if (acc[GI_VOX_OPACITY * (size_t)N * N * N + v] == 0u) {
+  if (acc[v * GI_VOX_RECORD + GI_VOX_OPACITY] == 0u) {
     level0Out[v] = own;
     return;
   }

@@ -141,20 +141,16 @@ typedef struct {
 
 inline VoxelSurface vox_resolve(GiVoxelGrid grid, global const uint* acc, size_t v) {
   int N = grid.resolution;
-  size_t plane = (size_t)N * N * N;
-  global const int* iacc = (global const int*)acc;
+  global const uint* a = acc + v * GI_VOX_RECORD;
+  global const int* ia = (global const int*)a;
   VoxelSurface r;
-  float weight = (float)acc[GI_VOX_OPACITY * plane + v] * (1.0f / GI_VOX_UNIT);  // Σ opacity
-  r.alpha = weight / (float)acc[GI_VOX_COUNT * plane + v];
+  float weight = (float)a[GI_VOX_OPACITY] * (1.0f / GI_VOX_UNIT);  // Σ opacity
+  r.alpha = weight / (float)a[GI_VOX_COUNT];
   float invW = 1.0f / weight;
-  r.albedo = (float3)(acc[GI_VOX_ALBEDO * plane + v], acc[(GI_VOX_ALBEDO + 1) * plane + v],
-                      acc[(GI_VOX_ALBEDO + 2) * plane + v]) * (invW / GI_VOX_UNIT);
-  r.emission = (float3)(acc[GI_VOX_EMISSION * plane + v], acc[(GI_VOX_EMISSION + 1) * plane + v],
-                        acc[(GI_VOX_EMISSION + 2) * plane + v]) * (invW / GI_VOX_EMISSION_UNIT);
-  float3 meanN = (float3)(iacc[GI_VOX_NORMAL * plane + v], iacc[(GI_VOX_NORMAL + 1) * plane + v],
-                          iacc[(GI_VOX_NORMAL + 2) * plane + v]) * (invW * 4.0f / GI_VOX_UNIT);
-  float3 offset = (float3)(iacc[GI_VOX_OFFSET * plane + v], iacc[(GI_VOX_OFFSET + 1) * plane + v],
-                           iacc[(GI_VOX_OFFSET + 2) * plane + v]) * (invW * 4.0f / GI_VOX_UNIT);
+  r.albedo = (float3)(a[GI_VOX_ALBEDO], a[GI_VOX_ALBEDO + 1], a[GI_VOX_ALBEDO + 2]) * (invW / GI_VOX_UNIT);
+  r.emission = (float3)(a[GI_VOX_EMISSION], a[GI_VOX_EMISSION + 1], a[GI_VOX_EMISSION + 2]) * (invW / GI_VOX_EMISSION_UNIT);
+  float3 meanN = (float3)(ia[GI_VOX_NORMAL], ia[GI_VOX_NORMAL + 1], ia[GI_VOX_NORMAL + 2]) * (invW * 4.0f / GI_VOX_UNIT);
+  float3 offset = (float3)(ia[GI_VOX_OFFSET], ia[GI_VOX_OFFSET + 1], ia[GI_VOX_OFFSET + 2]) * (invW * 4.0f / GI_VOX_UNIT);
   r.position = vload3(0, grid.origin) + (convert_float3(vox_cell(v, N)) + 0.5f + offset) * grid.voxel_size;
   r.twoSided = length(meanN) < 0.5f;
   r.normal = safe_normalize(meanN, (float3)(0.0f, 1.0f, 0.0f));

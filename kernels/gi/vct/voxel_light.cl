@@ -1,6 +1,7 @@
 // Light injection and mipmapping of the voxel grid (ALGORITHMS.md §5).
 //
-// vct_inject: per voxel, from the voxelization accumulators (voxel_types.h): opacity α = mean
+// vct_inject: per voxel of the occupied list (every other voxel of level 0 is zero: voxelize.cl's
+//   vct_clear_occupied), from the voxelization accumulators (voxel_types.h): opacity α = mean
 //   coverage of the triangles touching it; albedo, emission and normal = their opacity-weighted
 //   means; radiance L = ρ/π · E_direct + L_e, with E_direct the irradiance of every punctual light
 //   on the voxel's mean normal, shadowed through the frame's shadow maps (3×3 PCF). E is evaluated
@@ -22,14 +23,14 @@
 #include "common/shadow.h"
 #include "gi/vct/voxel_grid.h"
 
-kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const GiLight* lights, int lightCount,
+kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const uint* occupied,
+                       global const uint* occupiedCount, global const GiLight* lights, int lightCount,
                        global const GiView* shadowViews, global const uint* shadowOffsets,
                        global const float* shadowDepths, global float4* level0) {
-  int N = grid.resolution;
-  size_t plane = (size_t)N * N * N;
-  size_t v = get_global_id(0);
-  if (v >= plane) return;
-  if (acc[GI_VOX_OPACITY * plane + v] == 0u) {
+  size_t i = get_global_id(0);
+  if (i >= occupiedCount[0]) return;
+  size_t v = occupied[i];
+  if (acc[v * GI_VOX_RECORD + GI_VOX_OPACITY] == 0u) {  // only cut-away triangles: empty
     level0[v] = (float4)(0.0f);
     return;
   }
@@ -160,11 +161,10 @@ kernel void vct_mip_anisotropic(int N, int level, global float4* aniso) {
 kernel void vct_sh_project(GiVoxelGrid grid, global const uint* acc, global const float4* level0, float2 lobe,
                            global float4* sh) {
   int N = grid.resolution;
-  size_t plane = (size_t)N * N * N;
   size_t v = get_global_id(0);
-  if (v >= plane) return;
+  if (v >= (size_t)N * N * N) return;
   float4 k = (float4)(0.0f);
-  if (acc[GI_VOX_OPACITY * plane + v] != 0u) {
+  if (acc[v * GI_VOX_RECORD + GI_VOX_OPACITY] != 0u) {
     VoxelSurface vs = vox_resolve(grid, acc, v);
     k = vs.twoSided ? (float4)(2.0f * lobe.x, 0.0f, 0.0f, 0.0f)
                     : (float4)(lobe.x, lobe.y * vs.normal.y, lobe.y * vs.normal.z, lobe.y * vs.normal.x);

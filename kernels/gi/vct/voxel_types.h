@@ -5,8 +5,11 @@
 // (0, 0, 0) sits at `origin`; mip level l has (N >> l)³ voxels of edge voxel_size · 2^l, down to
 // 1³ (levels = log2 N + 1).
 //
-// Voxelization accumulators (one plane of N³ 32-bit integers per quantity, order-independent
-// integer atomics, ALGORITHMS.md §7). Each triangle–voxel pair adds, in fixed point:
+// Voxelization accumulators (one record of GI_VOX_RECORD 32-bit integers per voxel, voxel v's
+// field f at acc[v · GI_VOX_RECORD + f]: the 14 fields of a voxel share one 64-byte cache line, so
+// a triangle–voxel pair's atomics, the clear and the injection touch one line per voxel;
+// order-independent integer atomics, ALGORITHMS.md §7). Each triangle–voxel pair adds, in fixed
+// point:
 //   albedo ρ · opacity, emission · opacity, shading normal · opacity, the offset of the
 //   triangle's point nearest the voxel centre from that centre (in voxels) · opacity, opacity, 1.
 #pragma once
@@ -25,14 +28,16 @@ typedef struct {
   GI_I32 pad[2];
 } GiVoxelGrid;  // 32 bytes
 
-// Accumulator planes (plane p of voxel v at acc[p · N³ + v]).
-#define GI_VOX_ALBEDO 0    // 3 planes, uint, ρ·opacity · GI_VOX_UNIT
-#define GI_VOX_EMISSION 3  // 3 planes, uint, L_e·opacity · GI_VOX_EMISSION_UNIT
-#define GI_VOX_NORMAL 6    // 3 planes, int, n·opacity · GI_VOX_UNIT / 4
-#define GI_VOX_OFFSET 9    // 3 planes, int, (nearest point − centre)/voxel_size · opacity · GI_VOX_UNIT / 4
+// Accumulator fields (voxel v's field f at acc[v · GI_VOX_RECORD + f]).
+#define GI_VOX_ALBEDO 0    // 3 fields, uint, ρ·opacity · GI_VOX_UNIT
+#define GI_VOX_EMISSION 3  // 3 fields, uint, L_e·opacity · GI_VOX_EMISSION_UNIT
+#define GI_VOX_NORMAL 6    // 3 fields, int, n·opacity · GI_VOX_UNIT / 4
+#define GI_VOX_OFFSET 9    // 3 fields, int, (nearest point − centre)/voxel_size · opacity · GI_VOX_UNIT / 4
 #define GI_VOX_OPACITY 12  // uint, opacity · GI_VOX_UNIT
 #define GI_VOX_COUNT 13    // uint, triangles touching the voxel
-#define GI_VOX_PLANES 14
+#define GI_VOX_FIELDS 14
+#define GI_VOX_RECORD 16   // words per voxel: the fields padded to 64 bytes (one cache line; vct_clear_occupied
+                           // zeroes it as one uint16)
 
 // Fixed-point units: values in [0, 1] get 16 fractional bits, so 65535 contributions fit in 32 bits
 // (signed quantities in [-2, 2] one bit fewer). Emission (W/(m²·sr)) gets 8 fractional bits and

@@ -7,7 +7,7 @@
 // normal, 9 edge cross products) against the voxel grown by GI_VOX_GROW (conservative under float
 // rounding: a voxel the triangle touches is never missed), and adds, with integer atomics (order-
 // independent, so bit-identical run to run: ALGORITHMS.md §7), the material at the triangle's
-// point nearest the voxel centre. See voxel_types.h for the accumulator planes.
+// point nearest the voxel centre. See voxel_types.h for the accumulator records.
 #include "common/material.h"
 #include "gi/vct/voxel_types.h"
 
@@ -75,23 +75,75 @@ inline float2 nearest_on_triangle(float3 p, float3 a, float3 b, float3 c) {
 inline uint vox_fixed(float v, float unit) { return (uint)(v * unit + 0.5f); }
 inline int vox_fixed_signed(float v, float unit) { return (int)rint(v * unit); }
 
-kernel void vct_clear(global uint* acc, uint count) {
-  uint i = get_global_id(0);
-  if (i < count) acc[i] = 0u;
+// Zeroes the accumulators, level 0 of the radiance chain and the occupancy bits at the voxels the
+// previous voxelization listed (`occupied`, `occupiedCount` entries): every other voxel is still
+// zero from the buffers' initial fill, so the grid is clear without writing all of it (128³:
+// 134 MB of accumulators). One work-item per listed voxel; launched over N³ items, as the count is
+// on the device. Voxels of one occupancy word may clear it from several work-items: all store 0.
+kernel void vct_clear_occupied(global const uint* occupied, global const uint* occupiedCount, global uint* acc,
+                               global float4* level0, global uint* occupancy) {
+  size_t i = get_global_id(0);
+  if (i >= occupiedCount[0]) return;
+  size_t v = occupied[i];
+  ((global uint16*)acc)[v] = (uint16)(0u);  // the voxel's whole record (GI_VOX_RECORD = 16)
+  level0[v] = (float4)(0.0f);
+  occupancy[v >> 5] = 0u;
+}
+
+// The occupied list from the occupancy bits (bit v & 31 of word v >> 5 set by vct_voxelize), in
+// increasing voxel order, so that the passes over it (clear, injection) walk memory in order and
+// the list is the same bits every run. Three passes over spans of GI_VOX_SPAN_WORDS words:
+// count the bits of each span, scan the counts (one work-item; N³/2048 spans), write each span's
+// voxels from its offset.
+#define GI_VOX_SPAN_WORDS 64
+
+kernel void vct_occupancy_count(global const uint* occupancy, uint spans, global uint* spanCounts) {
+  size_t s = get_global_id(0);
+  if (s >= spans) return;
+  global const uint* w = occupancy + s * GI_VOX_SPAN_WORDS;
+  uint c = 0;
+  for (int k = 0; k < GI_VOX_SPAN_WORDS; ++k) c += popcount(w[k]);
+  spanCounts[s] = c;
+}
+
+kernel void vct_occupancy_scan(global uint* spanCounts, uint spans, global uint* occupiedCount) {
+  if (get_global_id(0) != 0) return;
+  uint total = 0;
+  for (uint s = 0; s < spans; ++s) {
+    uint c = spanCounts[s];
+    spanCounts[s] = total;  // exclusive prefix sum: the span's first list entry
+    total += c;
+  }
+  occupiedCount[0] = total;
+}
+
+kernel void vct_occupancy_list(global const uint* occupancy, global const uint* spanOffsets, uint spans,
+                               global uint* occupied) {
+  size_t s = get_global_id(0);
+  if (s >= spans) return;
+  uint o = spanOffsets[s];
+  for (int k = 0; k < GI_VOX_SPAN_WORDS; ++k) {
+    uint word = (uint)s * GI_VOX_SPAN_WORDS + k, bits = occupancy[word];
+    while (bits != 0u) {
+      uint lowest = bits & (0u - bits);
+      occupied[o++] = word * 32u + (31u - clz(lowest));
+      bits ^= lowest;
+    }
+  }
 }
 
 kernel void vct_voxelize(GiVoxelGrid grid, global const float4* positions, global const float4* normals,
                          global const float2* uvs, global const uint4* triangles,
                          global const uint* triangleInstance, global const GiMaterial* materials,
                          global const GiTexture* textures, global const uchar4* texels,
-                         global const uint* instanceEmits, uint triangleCount, global uint* acc) {
+                         global const uint* instanceEmits, uint triangleCount, global uint* acc,
+                         global uint* occupancy) {
   uint t = get_global_id(0);
   if (t >= triangleCount) return;
   uint4 tri = triangles[t];
   float3 origin = vload3(0, grid.origin);
   float s = grid.voxel_size, inv = 1.0f / s;
   int N = grid.resolution;
-  size_t plane = (size_t)N * N * N;
   // Vertices in voxel units relative to the grid corner.
   float3 v0 = (positions[tri.x].xyz - origin) * inv;
   float3 v1 = (positions[tri.y].xyz - origin) * inv;
@@ -146,33 +198,32 @@ kernel void vct_voxelize(GiVoxelGrid grid, global const float4* positions, globa
         float3 p = w0 * v0 + bc.x * v1 + bc.y * v2;
         float2 uv = w0 * uv0 + bc.x * uv1 + bc.y * uv2;
         float opacity = material_cut_out(m, textures, texels, uv, lod) ? 0.0f : 1.0f;
-        if (opacity == 0.0f) {
-          // Cut away here: the voxel still counts the triangle, with nothing to add.
-          atomic_inc(acc + GI_VOX_COUNT * plane + (size_t)(vi.z * N + vi.y) * N + vi.x);
-          continue;
-        }
+        size_t v = (size_t)(vi.z * N + vi.y) * N + vi.x;
+        // The first triangle to reach a voxel marks it occupied.
+        global uint* record = acc + v * GI_VOX_RECORD;
+        if (atomic_inc(record + GI_VOX_COUNT) == 0u) atomic_or(occupancy + (v >> 5), 1u << (v & 31));
+        // Cut away here: the voxel counts the triangle, with nothing to add.
+        if (opacity == 0.0f) continue;
         SurfaceSample sm = eval_material(m, textures, texels, uv, lod);
         float3 sn = safe_normalize(w0 * n0 + bc.x * n1 + bc.y * n2, normalize(faceN));
         float3 em = emits ? fmin(sm.emission, GI_VOX_EMISSION_MAX) : (float3)(0.0f);
         float3 off = clamp(p - c, -1.0f, 1.0f);
-        size_t v = (size_t)(vi.z * N + vi.y) * N + vi.x;
-        global int* iacc = (global int*)acc;
-        atomic_add(acc + (GI_VOX_ALBEDO + 0) * plane + v, vox_fixed(clamp(sm.diffuse.x, 0.0f, 1.0f), GI_VOX_UNIT));
-        atomic_add(acc + (GI_VOX_ALBEDO + 1) * plane + v, vox_fixed(clamp(sm.diffuse.y, 0.0f, 1.0f), GI_VOX_UNIT));
-        atomic_add(acc + (GI_VOX_ALBEDO + 2) * plane + v, vox_fixed(clamp(sm.diffuse.z, 0.0f, 1.0f), GI_VOX_UNIT));
+        global int* irecord = (global int*)record;
+        atomic_add(record + GI_VOX_ALBEDO + 0, vox_fixed(clamp(sm.diffuse.x, 0.0f, 1.0f), GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_ALBEDO + 1, vox_fixed(clamp(sm.diffuse.y, 0.0f, 1.0f), GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_ALBEDO + 2, vox_fixed(clamp(sm.diffuse.z, 0.0f, 1.0f), GI_VOX_UNIT));
         if (emits) {
-          atomic_add(acc + (GI_VOX_EMISSION + 0) * plane + v, vox_fixed(em.x, GI_VOX_EMISSION_UNIT));
-          atomic_add(acc + (GI_VOX_EMISSION + 1) * plane + v, vox_fixed(em.y, GI_VOX_EMISSION_UNIT));
-          atomic_add(acc + (GI_VOX_EMISSION + 2) * plane + v, vox_fixed(em.z, GI_VOX_EMISSION_UNIT));
+          atomic_add(record + GI_VOX_EMISSION + 0, vox_fixed(em.x, GI_VOX_EMISSION_UNIT));
+          atomic_add(record + GI_VOX_EMISSION + 1, vox_fixed(em.y, GI_VOX_EMISSION_UNIT));
+          atomic_add(record + GI_VOX_EMISSION + 2, vox_fixed(em.z, GI_VOX_EMISSION_UNIT));
         }
-        atomic_add(iacc + (GI_VOX_NORMAL + 0) * plane + v, vox_fixed_signed(sn.x, 0.25f * GI_VOX_UNIT));
-        atomic_add(iacc + (GI_VOX_NORMAL + 1) * plane + v, vox_fixed_signed(sn.y, 0.25f * GI_VOX_UNIT));
-        atomic_add(iacc + (GI_VOX_NORMAL + 2) * plane + v, vox_fixed_signed(sn.z, 0.25f * GI_VOX_UNIT));
-        atomic_add(iacc + (GI_VOX_OFFSET + 0) * plane + v, vox_fixed_signed(off.x, 0.25f * GI_VOX_UNIT));
-        atomic_add(iacc + (GI_VOX_OFFSET + 1) * plane + v, vox_fixed_signed(off.y, 0.25f * GI_VOX_UNIT));
-        atomic_add(iacc + (GI_VOX_OFFSET + 2) * plane + v, vox_fixed_signed(off.z, 0.25f * GI_VOX_UNIT));
-        atomic_add(acc + GI_VOX_OPACITY * plane + v, vox_fixed(opacity, GI_VOX_UNIT));
-        atomic_inc(acc + GI_VOX_COUNT * plane + v);
+        atomic_add(irecord + GI_VOX_NORMAL + 0, vox_fixed_signed(sn.x, 0.25f * GI_VOX_UNIT));
+        atomic_add(irecord + GI_VOX_NORMAL + 1, vox_fixed_signed(sn.y, 0.25f * GI_VOX_UNIT));
+        atomic_add(irecord + GI_VOX_NORMAL + 2, vox_fixed_signed(sn.z, 0.25f * GI_VOX_UNIT));
+        atomic_add(irecord + GI_VOX_OFFSET + 0, vox_fixed_signed(off.x, 0.25f * GI_VOX_UNIT));
+        atomic_add(irecord + GI_VOX_OFFSET + 1, vox_fixed_signed(off.y, 0.25f * GI_VOX_UNIT));
+        atomic_add(irecord + GI_VOX_OFFSET + 2, vox_fixed_signed(off.z, 0.25f * GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_OPACITY, vox_fixed(opacity, GI_VOX_UNIT));
       }
     }
   }

@@ -35,7 +35,10 @@ GiVoxelGrid fitVoxelGrid(const Bounds& bounds, int resolution) {
 }
 
 uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic, bool sh) {
-  uint64_t n = uint64_t(resolution) * resolution * resolution, bytes = n * GI_VOX_PLANES * 4;
+  // Accumulator records, the occupied voxel list (4 B per voxel), the occupancy bits and the
+  // compaction's span counts.
+  uint64_t n = uint64_t(resolution) * resolution * resolution;
+  uint64_t bytes = n * (GI_VOX_RECORD + 1) * 4 + n / 8 + n / kOccupancySpanVoxels * 4;
   // Per voxel of a chain: 16 B of radiance and opacity, plus 48 B of SH coefficients.
   uint64_t perVoxel = sh ? 64 : 16;
   for (int l = 0; (resolution >> l) > 0; ++l) bytes += (n >> (3 * l)) * perVoxel * (anisotropic && l > 0 ? 7 : 1);
@@ -51,7 +54,10 @@ uint64_t VoxelScene::anisoBytes() const {
 VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
     : ctx_(ctx), grid_(fitVoxelGrid(scene.bounds, resolution)) {
   voxelizeProgram_ = ctx.buildProgram("kernels/gi/vct/voxelize.cl");
-  clear_ = voxelizeProgram_.kernel("vct_clear");
+  clear_ = voxelizeProgram_.kernel("vct_clear_occupied");
+  occupancyCount_ = voxelizeProgram_.kernel("vct_occupancy_count");
+  occupancyScan_ = voxelizeProgram_.kernel("vct_occupancy_scan");
+  occupancyList_ = voxelizeProgram_.kernel("vct_occupancy_list");
   voxelize_ = voxelizeProgram_.kernel("vct_voxelize");
   lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl");
   inject_ = lightProgram_.kernel("vct_inject");
@@ -65,25 +71,44 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   uint64_t n = voxelCount();
   uint64_t chain = 0;
   for (int l = 0; l < grid_.levels; ++l) chain += (n >> (3 * l));
-  ctx.requireAllocation(n * GI_VOX_PLANES * 4, "vct voxelization accumulators (vct.resolution)");
+  ctx.requireAllocation(n * GI_VOX_RECORD * 4, "vct voxelization accumulators (vct.resolution)");
   ctx.requireAllocation(chain * 16, "vct radiance mips (vct.resolution)");
-  acc_ = cl::Buffer(ctx, n * GI_VOX_PLANES * 4, CL_MEM_READ_WRITE, "vct voxelization accumulators");
+  acc_ = cl::Buffer(ctx, n * GI_VOX_RECORD * 4, CL_MEM_READ_WRITE, "vct voxelization accumulators");
   iso_ = cl::Buffer(ctx, chain * 16, CL_MEM_READ_WRITE, "vct radiance mips");
+  occupied_ = cl::Buffer(ctx, n * 4, CL_MEM_READ_WRITE, "vct occupied voxel list");
+  occupiedCount_ = cl::Buffer(ctx, 4, CL_MEM_READ_WRITE, "vct occupied voxel count");
+  occupancy_ = cl::Buffer(ctx, n / 8, CL_MEM_READ_WRITE, "vct occupancy bits");
+  spanCounts_ = cl::Buffer(ctx, occupancySpans() * 4, CL_MEM_READ_WRITE, "vct occupancy span counts");
+  // Zero once: from then on each voxelization clears only the voxels it listed (vct_clear_occupied).
+  ctx.fill(acc_, uint32_t(0));
+  ctx.fill(iso_, 0.0f);
+  ctx.fill(occupiedCount_, uint32_t(0));
+  ctx.fill(occupancy_, uint32_t(0));
 }
 
+uint32_t VoxelScene::occupancySpans() const { return uint32_t(voxelCount() / kOccupancySpanVoxels); }
+
 void VoxelScene::voxelize(const DeviceScene& scene) {
-  uint32_t words = uint32_t(voxelCount() * GI_VOX_PLANES);
-  clear_.args(acc_, words);
-  ctx_.launch(clear_, cl::NDRange::d1(cl::roundUp(words, 256), 256), "vct: clear");
-  if (scene.triangleCount == 0) return;
-  voxelize_.args(grid_, scene.positions, scene.normals, scene.uvs, scene.triangles, scene.triangleInstance,
-                 scene.materials, scene.textures, scene.texels, instanceEmits_, scene.triangleCount, acc_);
-  ctx_.launch(voxelize_, cl::NDRange::d1(cl::roundUp(scene.triangleCount, 64), 64), "vct: voxelize");
+  uint32_t n = uint32_t(voxelCount()), spans = occupancySpans();
+  clear_.args(occupied_, occupiedCount_, acc_, iso_, occupancy_);
+  ctx_.launch(clear_, cl::NDRange::d1(cl::roundUp(n, 256), 256), "vct: clear");
+  if (scene.triangleCount > 0) {
+    voxelize_.args(grid_, scene.positions, scene.normals, scene.uvs, scene.triangles, scene.triangleInstance,
+                   scene.materials, scene.textures, scene.texels, instanceEmits_, scene.triangleCount, acc_,
+                   occupancy_);
+    ctx_.launch(voxelize_, cl::NDRange::d1(cl::roundUp(scene.triangleCount, 64), 64), "vct: voxelize");
+  }
+  occupancyCount_.args(occupancy_, spans, spanCounts_);
+  ctx_.launch(occupancyCount_, cl::NDRange::d1(cl::roundUp(spans, 16), 16), "vct: occupied list");
+  occupancyScan_.args(spanCounts_, spans, occupiedCount_);
+  ctx_.launch(occupancyScan_, cl::NDRange::d1(1, 1), "vct: occupied list");
+  occupancyList_.args(occupancy_, spanCounts_, spans, occupied_);
+  ctx_.launch(occupancyList_, cl::NDRange::d1(cl::roundUp(spans, 16), 16), "vct: occupied list");
 }
 
 void VoxelScene::inject(const DeviceScene& scene, const ShadowMapSet& shadows) {
   uint32_t n = uint32_t(voxelCount());
-  inject_.args(grid_, acc_, scene.lights, int(scene.lightCount), shadows.viewTable, shadows.offsetTable,
+  inject_.args(grid_, acc_, occupied_, occupiedCount_, scene.lights, int(scene.lightCount), shadows.viewTable, shadows.offsetTable,
                shadows.depths, iso_);
   ctx_.launch(inject_, cl::NDRange::d1(cl::roundUp(n, 256), 256), "vct: inject");
 }

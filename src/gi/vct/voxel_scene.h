@@ -35,9 +35,13 @@ public:
   int resolution() const { return grid_.resolution; }
   uint64_t voxelCount() const { return uint64_t(grid_.resolution) * grid_.resolution * grid_.resolution; }
 
-  // Clears the accumulators and voxelizes every triangle.
+  // Clears the accumulators and voxelizes every triangle. Clearing zeroes only the voxels of the
+  // previous voxelization's occupied list (accumulators and level 0 of iso): level 0 outside that
+  // list must be zero, as voxelize/inject leave it (a caller writing iso itself must not voxelize
+  // into the same VoxelScene afterwards).
   void voxelize(const DeviceScene& scene);
-  // Level 0: L = ρ/π·E_direct + L_e (premultiplied by opacity) from the lights and shadow maps.
+  // Level 0 of the occupied voxels: L = ρ/π·E_direct + L_e (premultiplied by opacity) from the
+  // lights and shadow maps; the other voxels stay zero.
   void inject(const DeviceScene& scene, const ShadowMapSet& shadows);
   // Levels 1 … log2 N from level 0: isotropic (`iso`) or 6 directional volumes (`aniso`).
   void buildMips(bool anisotropic);
@@ -47,12 +51,12 @@ public:
   void projectSh(ShLobe lobe);        // level 0 only
   void buildShMips(bool anisotropic);  // levels ≥ 1 only
 
-  const cl::Buffer& accumulators() const { return acc_; }  // GI_VOX_PLANES planes of N³ (voxel_types.h)
+  const cl::Buffer& accumulators() const { return acc_; }  // GI_VOX_RECORD words per voxel (voxel_types.h)
   cl::Buffer& iso() { return iso_; }      // float4 per voxel, all isotropic levels (voxel_grid.h)
   cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (allocated on first use)
   cl::Buffer& sh() { return sh_; }            // 3 float4 per voxel of iso (allocated on first use)
   cl::Buffer& shAniso() { return shAniso_; }  // 3 float4 per voxel of aniso (allocated on first use)
-  uint64_t bytes() const { return acc_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes(); }
+  uint64_t bytes() const { return acc_.bytes() + occupied_.bytes() + occupancy_.bytes() + spanCounts_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes(); }
   // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes)
   // (+ SH coefficients of the chains used).
   static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false);
@@ -61,8 +65,12 @@ private:
   cl::Context& ctx_;
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
-  cl::Kernel clear_, voxelize_, inject_, mipIso_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
-  cl::Buffer instanceEmits_, acc_, iso_, aniso_, sh_, shAniso_;
+  cl::Kernel clear_, occupancyCount_, occupancyScan_, occupancyList_, voxelize_, inject_, mipIso_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
+  // occupied_: the voxels the last voxelization touched (count in occupiedCount_), in increasing
+  // order, built from their bits in occupancy_ (1 bit per voxel) through per-span counts.
+  static constexpr uint64_t kOccupancySpanVoxels = 64 * 32;  // GI_VOX_SPAN_WORDS words (voxelize.cl)
+  uint32_t occupancySpans() const;
+  cl::Buffer instanceEmits_, acc_, occupied_, occupiedCount_, occupancy_, spanCounts_, iso_, aniso_, sh_, shAniso_;
 
   uint64_t anisoBytes() const;  // the 6 directional volumes of levels ≥ 1, float4 each
 };
