@@ -16,6 +16,7 @@
 //   propagation and/or the lookup alone, repeated on one rendered frame: timePasses)
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -94,7 +95,8 @@ void timePropagation(cl::Context& ctx, int n, int runs) {
 }
 
 // The passes one by one on one rendered Sponza frame (its G-buffer and RSM), each repeated `runs`
-// times after a warm-up: median device ms (profiler) and process CPU ms per repetition. One 32³
+// times after a warm-up: median device ms (profiler) and process CPU ms per repetition, and the
+// least of each (under load the least disturbed repetition). One 32³
 // grid over the scene and 3 cascades of 32³ (finest edge = a quarter of the bounds' longest edge,
 // centred on the camera). Less noisy than whole frames: nothing else runs between the launches.
 void timePasses(cl::Context& ctx, const Scene& scene, const timing::FrameSettings& a, const std::string& which) {
@@ -127,7 +129,9 @@ void timePasses(cl::Context& ctx, const Scene& scene, const timing::FrameSetting
         device.push_back(ms);
         cpu.push_back(c1 - c0);
       }
-      std::printf("  %-44s %8.3f ms device, %8.3f ms CPU\n", what, timing::median(device), timing::median(cpu));
+      std::printf("  %-44s %8.3f ms device, %8.3f ms CPU (least: %.3f, %.3f)\n", what, timing::median(device),
+                  timing::median(cpu), *std::min_element(device.begin(), device.end()),
+                  *std::min_element(cpu.begin(), cpu.end()));
     };
     std::printf("%s:\n", cascades ? "3 cascades of 32^3" : "one 32^3 grid over the scene");
     auto fill = [&] {

@@ -392,19 +392,18 @@ kernel void lpv_propagate(global const float* src, global float* dst, global flo
   floatL t[6][5];
 #pragma unroll
   for (int dir = 0; dir < 6; ++dir) {
-    if (blocking && inside[dir]) {
-      // The shared face: the lower face along a of the cell itself (light along +a) or of the cell above.
-      global const float* face =
-          faceGeometry + LPV_PAD + LPV_PLANE(k, dir / 2, 0) + cell + (dir % 2 ? stride[dir / 2] : 0);
-      floatL g[4];
+    // The shared face: the lower face along a of the cell itself (light along +a) or of the cell
+    // above. Without blocking, and for rows outside the grid, the potential is zero (T_f = ΔΩ_f/π
+    // exactly) and the cell's own face is read in place of one that may lie past the buffer: no
+    // branch, so the 30 factors stay in registers (with an if/else here the step cost 3× more).
+    bool blocked = blocking && inside[dir];
+    global const float* face =
+        faceGeometry + LPV_PAD + LPV_PLANE(k, dir / 2, 0) + cell + (blocked && dir % 2 ? stride[dir / 2] : 0);
+    float use = blocked ? 1.0f : 0.0f;
+    floatL g[4];
 #pragma unroll
-      for (int q = 0; q < 4; ++q) g[q] = vloadL(0, face + (size_t)q * LPV_STRIDE);
-      lpv_transmittance(dir, g, t[dir]);
-    } else {
-#pragma unroll
-      for (int f = 0; f < 5; ++f)
-        t[dir][f] = (floatL)((f == 0 ? LPV_MAIN_FACE_SOLID_ANGLE : LPV_SIDE_FACE_SOLID_ANGLE) * GI_INV_PI);
-    }
+    for (int q = 0; q < 4; ++q) g[q] = use * vloadL(0, face + (size_t)q * LPV_STRIDE);
+    lpv_transmittance(dir, g, t[dir]);
   }
 #pragma unroll
   for (int ch = 0; ch < 3; ++ch) {
