@@ -293,11 +293,13 @@ TEST(Igi, DiscontinuityFilterMatchesHost) {
 // against a host mirror of its formula: 2×2 bilinear taps at the low-resolution pixels' guide
 // pixels (u·f, v·f), kept by the depth/normal test, renormalised, nearest tap when none passes,
 // L = ρ/π · max(0, E). Real G-buffer discontinuities (Cornell box with blocks), odd sizes,
-// random E with negative values (second-order's net irradiance can be negative).
+// random E with negative values (second-order's net irradiance can be negative). W = 45 gives
+// factor 2 blocks away from the borders (the swizzled-lane path) at 8 and at 16 lanes, next to
+// border blocks (the per-lane gathers).
 TEST(Igi, GeometryAwareUpsamplerMatchesHost) {
   cl::Context& ctx = test::context();
   Scene s = cornellWithBlocksAndSpot();
-  const int W = 37, H = 31;
+  const int W = 45, H = 37;
   Renderer r(ctx, s, test::smallRenderSettings("vpl", W, H, {"vpl.count=4"}));
   r.renderFrame();
   const GBuffer& g = r.gbuffer();

@@ -164,6 +164,31 @@ kernel void discontinuity_filter(int width, int height, global const float* plan
 #ifndef GI_UP
 #define GI_UP 2
 #endif
+
+// Factor 2 with GI_VW > 1: lane l of a block starting at even x0 takes its horizontal taps at
+// low-resolution columns b + ⌈l/2⌉ and b + ⌈l/2⌉ + 1 and its nearest pixel at b + ⌊l/2⌋ + 1,
+// b = x0/2 − 1: all within GI_VW columns from b. Away from the image's left and right borders a
+// block loads each plane once per tap row (low-resolution E contiguously, the guide pixels
+// (2(b + r), ·) at fixed offsets from x0) and spreads it over the lanes with fixed swizzles instead
+// of gathering per lane with computed indices (the cost that dominated this kernel). The lanes get
+// the same values as the gathers give, so the result is bit-identical.
+#if GI_UP == 2 && GI_VW > 1
+#define GI_UP2_LANES 1
+#if GI_VW == 16
+#define UP2_TAP0(v) (v).s0112233445566778
+#define UP2_TAP1(v) (v).s1223344556677889
+#define UP2_NEAREST(v) (v).s1122334455667788
+// Guide pixel of low-resolution column b + r relative to x0 (lanes past r = GI_VW/2 + 1 repeat it).
+#define UP2_GUIDE_OFFSETS (int16)(-2, 0, 2, 4, 6, 8, 10, 12, 14, 16, 16, 16, 16, 16, 16, 16)
+#else
+#define UP2_TAP0(v) (v).s01122334
+#define UP2_TAP1(v) (v).s12233445
+#define UP2_NEAREST(v) (v).s11223344
+#define UP2_GUIDE_OFFSETS (int8)(-2, 0, 2, 4, 6, 8, 8, 8)
+#endif
+#else
+#define GI_UP2_LANES 0
+#endif
 kernel void geometry_aware_upsample(int width, int height, int lowWidth, int lowHeight,
                                     global const float* lowIrradiance, global const float* depth,
                                     global const float* geoNormal, global const uint* instance,
@@ -197,21 +222,52 @@ kernel void geometry_aware_upsample(int width, int height, int lowWidth, int low
   float ay = clamp(fy - (float)v0, 0.0f, 1.0f);
   floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), wsum = (floatV)(0.0f);
   floatV tz = tauZ * z;
+#if GI_UP2_LANES
+  // The block and its taps inside the image: x0 ≥ 2 (b ≥ 0), guide pixels up to x0 + GI_VW + 1,
+  // low-resolution columns b … b + GI_VW − 1 in the row.
+  int b = x0 / 2 - 1;
+  bool interior = whole && x0 >= 2 && x0 + GI_VW + 2 <= width && b + GI_VW <= lowWidth;
+#endif
 #pragma unroll
   for (int j = 0; j < 2; ++j) {
     int v = min(v0 + j, lowHeight - 1);
     int guideRow = min(v * GI_UP, height - 1) * width;
     float wy = j ? ay : 1.0f - ay;
+#if GI_UP2_LANES
+    floatV gz, gnx, gny, gnz, ger, geg, geb;  // per low-resolution column b + r (lane r)
+    uintV gid;
+    if (interior) {
+      gz = GI_GATHER(floatV, depth + guideRow + x0, UP2_GUIDE_OFFSETS);
+      gid = GI_GATHER(uintV, instance + guideRow + x0, UP2_GUIDE_OFFSETS);
+      GI_GATHER_AOS4(float, geoNormal + 4 * (size_t)(guideRow + x0), UP2_GUIDE_OFFSETS, gnx, gny, gnz, unused)
+      GI_AOS4_LOAD(lowIrradiance + 4 * (size_t)(v * lowWidth + b), ger, geg, geb, unused)
+    }
+#endif
 #pragma unroll
     for (int k = 0; k < 2; ++k) {
-      intV u = min(u0 + k, lowWidth - 1);
-      intV q = guideRow + min(u * GI_UP, width - 1);
       floatV w = (k ? ax : 1.0f - ax) * wy + 1e-4f;
-      floatV qz = GI_GATHER(floatV, depth, q);
-      uintV qid = GI_GATHER(uintV, instance, q);
-      floatV qnx, qny, qnz, er, eg, eb;
-      GI_GATHER_AOS4(float, geoNormal, q, qnx, qny, qnz, unused)
-      GI_GATHER_AOS4(float, lowIrradiance, v * lowWidth + u, er, eg, eb, unused)
+      floatV qz, qnx, qny, qnz, er, eg, eb;
+      uintV qid;
+#if GI_UP2_LANES
+      if (interior) {
+        qz = k ? UP2_TAP1(gz) : UP2_TAP0(gz);
+        qid = k ? UP2_TAP1(gid) : UP2_TAP0(gid);
+        qnx = k ? UP2_TAP1(gnx) : UP2_TAP0(gnx);
+        qny = k ? UP2_TAP1(gny) : UP2_TAP0(gny);
+        qnz = k ? UP2_TAP1(gnz) : UP2_TAP0(gnz);
+        er = k ? UP2_TAP1(ger) : UP2_TAP0(ger);
+        eg = k ? UP2_TAP1(geg) : UP2_TAP0(geg);
+        eb = k ? UP2_TAP1(geb) : UP2_TAP0(geb);
+      } else
+#endif
+      {
+        intV u = min(u0 + k, lowWidth - 1);
+        intV q = guideRow + min(u * GI_UP, width - 1);
+        qz = GI_GATHER(floatV, depth, q);
+        qid = GI_GATHER(uintV, instance, q);
+        GI_GATHER_AOS4(float, geoNormal, q, qnx, qny, qnz, unused)
+        GI_GATHER_AOS4(float, lowIrradiance, v * lowWidth + u, er, eg, eb, unused)
+      }
 #if GI_VW == 1
       bool ok = qid != GI_INVALID_ID && fabs(qz - z) <= tz && qnx * nx + qny * ny + qnz * nz >= cosTauN;
 #else
@@ -228,7 +284,17 @@ kernel void geometry_aware_upsample(int width, int height, int lowWidth, int low
   intV un = clamp(convert_intV(floor(fx + 0.5f)), 0, lowWidth - 1);
   int vn = clamp((int)floor(fy + 0.5f), 0, lowHeight - 1);
   floatV nr, ng, nb;
-  GI_GATHER_AOS4(float, lowIrradiance, vn * lowWidth + un, nr, ng, nb, unused)
+#if GI_UP2_LANES
+  if (interior) {
+    GI_AOS4_LOAD(lowIrradiance + 4 * (size_t)(vn * lowWidth + b), nr, ng, nb, unused)
+    nr = UP2_NEAREST(nr);
+    ng = UP2_NEAREST(ng);
+    nb = UP2_NEAREST(nb);
+  } else
+#endif
+  {
+    GI_GATHER_AOS4(float, lowIrradiance, vn * lowWidth + un, nr, ng, nb, unused)
+  }
   intV accepted = wsum > 0.0f;
   floatV wdiv = GI_SEL((floatV)(1.0f), wsum, accepted);
   // Irradiance is never negative; second-order's net E_s − E_n can be (ALGORITHMS.md §2.6).

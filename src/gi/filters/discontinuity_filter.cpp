@@ -52,7 +52,10 @@ void GeometryAwareUpsampler::run(const GBuffer& g, const cl::Buffer& lowIrradian
   int vw = cl::gatherVectorWidth(ctx_);
   size_t gx = (size_t(g.width) + vw - 1) / vw;
   if (vw == 1) ctx_.launch(k, cl::NDRange::d2(cl::roundUp(gx, 16), cl::roundUp(g.height, 16), 16, 16), label_);
-  else ctx_.launch(k, cl::NDRange::d2(gx, cl::roundUp(g.height, 8), 1, 8), label_);
+  // Work-groups along a row: PoCL runs a group's work-items one after another, and 16 blocks of
+  // one row stream through memory where a column of blocks from 8 rows did not (1 x 8 groups
+  // took 1.3-2x the CPU time; docs/PERFORMANCE.md, issue 5).
+  else ctx_.launch(k, cl::NDRange::d2(cl::roundUp(gx, 16), g.height, 16, 1), label_);
 }
 
 }  // namespace gi
