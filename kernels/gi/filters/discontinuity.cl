@@ -7,9 +7,15 @@
 // quantity is irradiance E; the output is the radiance L = ρ/π · E (the albedo is applied after
 // filtering, so texture detail stays sharp).
 //
-// Two passes (below): a padded SoA copy, then GI_VW pixels of a row per work-item with the window
-// loops unrolled (compile-time GI_FX, GI_FY) and one vector load per plane and offset
-// (PERFORMANCE_FACTS.md points 2, 6, 7).
+// One pass, straight from the G-buffer. On a CPU device (GI_VW = 8 or 16) a work-item takes
+// GI_VW adjacent pixels of GI_FILTER_ROWS consecutive rows: it first copies the rows its window
+// needs (GI_FILTER_ROWS + GI_FY − 1 of them, GI_FILTER_APRON columns either side) into private
+// SoA planes, the float4 records transposed with vector swizzles, then every window offset is
+// one unaligned vector load per plane from those (PERFORMANCE_FACTS.md points 2, 6, 7). The
+// copy's depth is NaN outside the image and at pixels without a surface, so the one comparison
+// |z_q − z_p| ≤ τ_z·z_p also rejects them: the window loop has no border or empty-pixel tests.
+// (A separate padded-plane pass cost a DRAM write and read-back of 32 bytes per pixel.)
+// GI_VW = 1 (GPUs): one pixel per work-item, neighbours read from the G-buffer.
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/vector_width.h"
@@ -20,137 +26,196 @@
 #ifndef GI_FY
 #define GI_FY 4
 #endif
-
-// Pass 1 (16 pixels per work-item on every device): copy what the filter reads into padded float planes
-// (SoA, GI_FILTER_PAD floats of margin before and after) so that pass 2 can load 16 neighbours
-// of a row with one unaligned vector load: E r, g, b; view depth; geometric normal x, y, z;
-// instance id (as uint bits).
-#define GI_FILTER_PAD 64
-kernel void discontinuity_prepare(int width, int height, global const float4* irradiance, global const float* depth,
-                                  global const float4* geoNormal, global const uint* instance, global float* planes) {
-  size_t g = get_global_id(0);
-  size_t n = (size_t)width * height;
-  size_t i0 = g * 16;
-  if (i0 >= n) return;
-  size_t L = n + 2 * GI_FILTER_PAD;
-  global float* o = planes + GI_FILTER_PAD + i0;
-  if (i0 + 16 <= n) {
-    // 16 pixels: four float16 loads per float4 plane, transposed by swizzles (no gathers).
-    global const float* e = (global const float*)(irradiance + i0);
-    float16 a = vload16(0, e), b = vload16(1, e), c = vload16(2, e), d = vload16(3, e);
-    vstore16((float16)(a.s048c, b.s048c, c.s048c, d.s048c), 0, o);
-    vstore16((float16)(a.s159d, b.s159d, c.s159d, d.s159d), 0, o + L);
-    vstore16((float16)(a.s26ae, b.s26ae, c.s26ae, d.s26ae), 0, o + 2 * L);
-    vstore16(vload16(0, depth + i0), 0, o + 3 * L);
-    global const float* q = (global const float*)(geoNormal + i0);
-    a = vload16(0, q);
-    b = vload16(1, q);
-    c = vload16(2, q);
-    d = vload16(3, q);
-    vstore16((float16)(a.s048c, b.s048c, c.s048c, d.s048c), 0, o + 4 * L);
-    vstore16((float16)(a.s159d, b.s159d, c.s159d, d.s159d), 0, o + 5 * L);
-    vstore16((float16)(a.s26ae, b.s26ae, c.s26ae, d.s26ae), 0, o + 6 * L);
-    vstore16(vload16(0, instance + i0), 0, (global uint*)(o + 7 * L));
-  } else {
-    for (size_t i = i0; i < n; ++i) {
-      global float* p = planes + GI_FILTER_PAD + i;
-      float4 e = irradiance[i], gn = geoNormal[i];
-      p[0] = e.x;
-      p[L] = e.y;
-      p[2 * L] = e.z;
-      p[3 * L] = depth[i];
-      p[4 * L] = gn.x;
-      p[5 * L] = gn.y;
-      p[6 * L] = gn.z;
-      ((global uint*)p)[7 * L] = instance[i];
-    }
-  }
-}
-
-#if GI_VW == 1
-#define FSEL(a, b, c) ((c) ? (b) : (a))
-#define FLOAD(p) (*(p))
-#define ULOAD(p) (*(p))
-#else
-#define FSEL(a, b, c) select(a, b, c)
-#define FLOAD(p) vloadV(0, p)
-#define ULOAD(p) vloadV(0, p)
+#ifndef GI_SAME_INSTANCE
+#define GI_SAME_INSTANCE 0
+#endif
+#if GI_FX > 16 || GI_FY > 16
+#error "discontinuity filter window larger than 16x16"
 #endif
 
-// Pass 2: GI_VW adjacent pixels of a row per work-item; every window offset is one unaligned
-// vector load per plane, lanes outside the image masked (the planes' margins keep the loads in
-// bounds). Same test, same summation order (dy outer, dx inner) as the host mirror in the tests.
-kernel void discontinuity_filter(int width, int height, global const float* planes, global const float4* albedo,
-                                 float tauZ, float cosTauN, int sameInstance, global float4* out) {
-  int gx = get_global_id(0), y = get_global_id(1);
-  int x0 = gx * GI_VW;
-  if (x0 >= width || y >= height) return;
-  size_t L = (size_t)width * height + 2 * GI_FILTER_PAD;
-  global const float* pr = planes;
-  global const float* pg = planes + L;
-  global const float* pb = planes + 2 * L;
-  global const float* pz = planes + 3 * L;
-  global const float* pnx = planes + 4 * L;
-  global const float* pny = planes + 5 * L;
-  global const float* pnz = planes + 6 * L;
-  global const uint* pid = (global const uint*)(planes + 7 * L);
-  size_t c = GI_FILTER_PAD + (size_t)y * width + x0;
-  floatV z = FLOAD(pz + c), nx = FLOAD(pnx + c), ny = FLOAD(pny + c), nz = FLOAD(pnz + c);
-  uintV id = ULOAD(pid + c);
-  intV xl = x0 + GI_LANES;
-  floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), ws = (floatV)(0.0f);
-  floatV tz = tauZ * z;
-#pragma unroll
-  for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
-    int qy = y + dy;
-    if (qy < 0 || qy >= height) continue;
-#pragma unroll
+#if GI_VW == 1
+kernel void discontinuity_filter(int width, int height, global const float4* irradiance, global const float* depth,
+                                 global const float4* geoNormal, global const uint* instance,
+                                 global const float4* albedo, float tauZ, float cosTauN, global float4* out) {
+  int x = get_global_id(0), y = get_global_id(1);
+  if (x >= width || y >= height) return;
+  size_t p = (size_t)y * width + x;
+  uint id = instance[p];
+  if (id == GI_INVALID_ID) {
+    out[p] = (float4)(0.0f);
+    return;
+  }
+  float z = depth[p], tz = tauZ * z;
+  float3 n = geoNormal[p].xyz, sum = (float3)(0.0f);
+  float ws = 0.0f;
+  for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy)
     for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
-      size_t q = (size_t)((long)GI_FILTER_PAD + (long)qy * width + x0 + dx);
-      intV qx = xl + dx;
-      uintV qid = ULOAD(pid + q);
-      floatV dz = fabs(FLOAD(pz + q) - z);
-      floatV dn = FLOAD(pnx + q) * nx + FLOAD(pny + q) * ny + FLOAD(pnz + q) * nz;
-#if GI_VW == 1
-      bool ok = qx >= 0 && qx < width && qid != GI_INVALID_ID && dz <= tz && dn >= cosTauN &&
-                (sameInstance == 0 || qid == id);
-      if (ok) {
-        sr += FLOAD(pr + q);
-        sg += FLOAD(pg + q);
-        sb += FLOAD(pb + q);
-        ws += 1.0f;
-      }
+      int qx = x + dx, qy = y + dy;
+      if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
+      size_t q = (size_t)qy * width + qx;
+      uint qid = instance[q];
+      if (qid == GI_INVALID_ID || !(fabs(depth[q] - z) <= tz) || !(dot(geoNormal[q].xyz, n) >= cosTauN) ||
+          (GI_SAME_INSTANCE && qid != id))
+        continue;
+      sum += irradiance[q].xyz;
+      ws += 1.0f;
+    }
+  float3 e = ws > 0.0f ? sum / ws : irradiance[p].xyz;
+  out[p] = (float4)(albedo[p].xyz * (e * GI_INV_PI), 0.0f);
+}
 #else
-      intV ok = (qx >= 0) & (qx < width) & (qid != GI_INVALID_ID) & (dz <= tz) & (dn >= cosTauN) &
-                ((intV)(sameInstance == 0 ? -1 : 0) | (qid == id));
-      sr += FSEL((floatV)(0.0f), FLOAD(pr + q), ok);
-      sg += FSEL((floatV)(0.0f), FLOAD(pg + q), ok);
-      sb += FSEL((floatV)(0.0f), FLOAD(pb + q), ok);
-      ws += FSEL((floatV)(0.0f), (floatV)(1.0f), ok);
+
+// Output rows per work-item: the window's extra GI_FY − 1 rows are copied once per GI_FILTER_ROWS.
+#ifndef GI_FILTER_ROWS
+#define GI_FILTER_ROWS 16
+#endif
+// Copied columns either side: ≥ the window's half-width, a multiple of 4 (copied 4 pixels at a time).
+#if GI_FX <= 8
+#define GI_FILTER_APRON 4
+#else
+#define GI_FILTER_APRON 8
+#endif
+#define GI_FILTER_SPAN (GI_VW + 2 * GI_FILTER_APRON) // copied columns per row
+#define GI_FILTER_IN_ROWS (GI_FILTER_ROWS + GI_FY - 1)
+#define GI_FILTER_PLANES (7 + GI_SAME_INSTANCE)      // E r, g, b; depth; normal x, y, z; [instance]
+
+// 4 pixels from G-buffer index i to plane column d (plane k at d + k·GI_FILTER_SPAN).
+inline void filterCopyQuad(size_t i, global const float* irradiance, global const float* depth,
+                           global const float* geoNormal, global const uint* instance, float* d) {
+  float16 e = vload16(0, irradiance + 4 * i), n = vload16(0, geoNormal + 4 * i);
+  uint4 id = vload4(0, instance + i);
+  vstore4(e.s048c, 0, d);
+  vstore4(e.s159d, 0, d + GI_FILTER_SPAN);
+  vstore4(e.s26ae, 0, d + 2 * GI_FILTER_SPAN);
+  vstore4(select(vload4(0, depth + i), (float4)(NAN), id == GI_INVALID_ID), 0, d + 3 * GI_FILTER_SPAN);
+  vstore4(n.s048c, 0, d + 4 * GI_FILTER_SPAN);
+  vstore4(n.s159d, 0, d + 5 * GI_FILTER_SPAN);
+  vstore4(n.s26ae, 0, d + 6 * GI_FILTER_SPAN);
+#if GI_SAME_INSTANCE
+  vstore4(as_float4(id), 0, d + 7 * GI_FILTER_SPAN);
+#endif
+}
+
+// Copies GI_FILTER_SPAN pixels of row y starting at column xs into plane row `o` (plane k at
+// o + k·GI_FILTER_SPAN): vector loads and swizzles when the span is inside the image, else pixel
+// by pixel with NaN depth outside it.
+inline void filterCopyRow(int width, int height, int xs, int y, global const float* irradiance,
+                          global const float* depth, global const float* geoNormal, global const uint* instance,
+                          float* o) {
+  if (y >= 0 && y < height && xs >= 0 && xs + GI_FILTER_SPAN <= width) {
+    size_t row = (size_t)y * width + xs;
+#pragma unroll
+    for (int a = 0; a < GI_FILTER_APRON; a += 4) {
+      filterCopyQuad(row + a, irradiance, depth, geoNormal, instance, o + a);
+      filterCopyQuad(row + GI_FILTER_APRON + GI_VW + a, irradiance, depth, geoNormal, instance,
+                     o + GI_FILTER_APRON + GI_VW + a);
+    }
+    size_t i = row + GI_FILTER_APRON;
+    floatV r, g, b, nx, ny, nz, unused;
+    GI_AOS4_LOAD(irradiance + 4 * i, r, g, b, unused)
+    GI_AOS4_LOAD(geoNormal + 4 * i, nx, ny, nz, unused)
+    uintV id = vloadV(0, instance + i);
+    float* d = o + GI_FILTER_APRON;
+    vstoreV(r, 0, d);
+    vstoreV(g, 0, d + GI_FILTER_SPAN);
+    vstoreV(b, 0, d + 2 * GI_FILTER_SPAN);
+    vstoreV(select(vloadV(0, depth + i), (floatV)(NAN), id == GI_INVALID_ID), 0, d + 3 * GI_FILTER_SPAN);
+    vstoreV(nx, 0, d + 4 * GI_FILTER_SPAN);
+    vstoreV(ny, 0, d + 5 * GI_FILTER_SPAN);
+    vstoreV(nz, 0, d + 6 * GI_FILTER_SPAN);
+#if GI_SAME_INSTANCE
+    vstoreV(as_floatV(id), 0, d + 7 * GI_FILTER_SPAN);
+#endif
+  } else {
+    for (int j = 0; j < GI_FILTER_SPAN; ++j) {
+      int x = xs + j;
+      bool in = y >= 0 && y < height && x >= 0 && x < width;
+      size_t i = in ? (size_t)y * width + x : 0;
+      uint id = in ? instance[i] : GI_INVALID_ID;
+      float4 e = in ? vload4(i, irradiance) : (float4)(0.0f), n = in ? vload4(i, geoNormal) : (float4)(0.0f);
+      o[j] = e.x;
+      o[j + GI_FILTER_SPAN] = e.y;
+      o[j + 2 * GI_FILTER_SPAN] = e.z;
+      o[j + 3 * GI_FILTER_SPAN] = id == GI_INVALID_ID ? NAN : depth[i];
+      o[j + 4 * GI_FILTER_SPAN] = n.x;
+      o[j + 5 * GI_FILTER_SPAN] = n.y;
+      o[j + 6 * GI_FILTER_SPAN] = n.z;
+#if GI_SAME_INSTANCE
+      o[j + 7 * GI_FILTER_SPAN] = as_float(id);
 #endif
     }
   }
-#if GI_VW == 1
-  {
-    size_t i = (size_t)y * width + x0;
-    float3 e = ws > 0.0f ? (float3)(sr, sg, sb) / ws : (float3)(pr[c], pg[c], pb[c]);
-    out[i] = id == GI_INVALID_ID ? (float4)(0.0f) : (float4)(albedo[i].xyz * (e * GI_INV_PI), 0.0f);
-  }
-#else
-  float v[4][GI_VW];
-  vstoreV(sr, 0, v[0]);
-  vstoreV(sg, 0, v[1]);
-  vstoreV(sb, 0, v[2]);
-  vstoreV(ws, 0, v[3]);
-  for (int l = 0; l < GI_VW; ++l) {
-    if (x0 + l >= width) break;
-    size_t i = (size_t)y * width + x0 + l;
-    uint il = pid[c + l];
-    float3 e = v[3][l] > 0.0f ? (float3)(v[0][l], v[1][l], v[2][l]) / v[3][l] : (float3)(pr[c + l], pg[c + l], pb[c + l]);
-    out[i] = il == GI_INVALID_ID ? (float4)(0.0f) : (float4)(albedo[i].xyz * (e * GI_INV_PI), 0.0f);
-  }
-#endif
 }
+
+// Same test, same summation order (dy outer, dx inner) as the host mirror in the tests.
+kernel void discontinuity_filter(int width, int height, global const float* irradiance, global const float* depth,
+                                 global const float* geoNormal, global const uint* instance,
+                                 global const float* albedo, float tauZ, float cosTauN, global float* out) {
+  int x0 = get_global_id(0) * GI_VW, y0 = get_global_id(1) * GI_FILTER_ROWS;
+  if (x0 >= width || y0 >= height) return;
+  float rows[GI_FILTER_IN_ROWS][GI_FILTER_PLANES][GI_FILTER_SPAN];
+  for (int r = 0; r < GI_FILTER_IN_ROWS; ++r)
+    filterCopyRow(width, height, x0 - GI_FILTER_APRON, y0 - GI_FY / 2 + r, irradiance, depth, geoNormal, instance,
+                  &rows[r][0][0]);
+  for (int r = 0; r < GI_FILTER_ROWS; ++r) {
+    int y = y0 + r;
+    if (y >= height) break;
+    float(*own)[GI_FILTER_SPAN] = rows[r + GI_FY / 2];
+    floatV z = vloadV(0, own[3] + GI_FILTER_APRON), nx = vloadV(0, own[4] + GI_FILTER_APRON),
+           ny = vloadV(0, own[5] + GI_FILTER_APRON), nz = vloadV(0, own[6] + GI_FILTER_APRON);
+#if GI_SAME_INSTANCE
+    floatV id = vloadV(0, own[7] + GI_FILTER_APRON);
+#endif
+    floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), ws = (floatV)(0.0f);
+    floatV tz = tauZ * z;
+#pragma unroll
+    for (int dy = 0; dy < GI_FY; ++dy) {
+      float(*q)[GI_FILTER_SPAN] = rows[r + dy];
+#pragma unroll
+      for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
+        int o = GI_FILTER_APRON + dx;
+        floatV dz = fabs(vloadV(0, q[3] + o) - z);  // NaN outside the image and where no surface: rejected
+        floatV dn = vloadV(0, q[4] + o) * nx + vloadV(0, q[5] + o) * ny + vloadV(0, q[6] + o) * nz;
+        intV ok = (dz <= tz) & (dn >= cosTauN);
+#if GI_SAME_INSTANCE
+        ok &= as_uintV(vloadV(0, q[7] + o)) == as_uintV(id);
+#endif
+        sr += select((floatV)(0.0f), vloadV(0, q[0] + o), ok);
+        sg += select((floatV)(0.0f), vloadV(0, q[1] + o), ok);
+        sb += select((floatV)(0.0f), vloadV(0, q[2] + o), ok);
+        ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
+      }
+    }
+    // No neighbour accepted (not even the pixel itself, e.g. a zero normal): its own E. Pixels
+    // without a surface (NaN depth): 0.
+    intV accepted = ws > 0.0f;
+    floatV wdiv = select((floatV)(1.0f), ws, accepted);
+    floatV er = select(vloadV(0, own[0] + GI_FILTER_APRON), sr / wdiv, accepted),
+           eg = select(vloadV(0, own[1] + GI_FILTER_APRON), sg / wdiv, accepted),
+           eb = select(vloadV(0, own[2] + GI_FILTER_APRON), sb / wdiv, accepted);
+    intV surface = !isnan(z);
+    size_t i = (size_t)y * width + x0;
+    if (x0 + GI_VW <= width) {
+      floatV zero = (floatV)(0.0f), ar, ag, ab, unused;
+      GI_AOS4_LOAD(albedo + 4 * i, ar, ag, ab, unused)
+      floatV lr = select(zero, ar * (er * GI_INV_PI), surface), lg = select(zero, ag * (eg * GI_INV_PI), surface),
+             lb = select(zero, ab * (eb * GI_INV_PI), surface);
+      GI_AOS4_STORE(out + 4 * i, lr, lg, lb, zero)
+    } else {
+      float v[4][GI_VW];
+      vstoreV(er, 0, v[0]);
+      vstoreV(eg, 0, v[1]);
+      vstoreV(eb, 0, v[2]);
+      vstoreV(convert_floatV(surface), 0, v[3]);
+      for (int l = 0; x0 + l < width; ++l) {
+        float3 a = vload3(0, albedo + 4 * (i + l));
+        float3 L = v[3][l] != 0.0f ? a * ((float3)(v[0][l], v[1][l], v[2][l]) * GI_INV_PI) : (float3)(0.0f);
+        vstore4((float4)(L, 0.0f), i + l, out);
+      }
+    }
+  }
+}
+#endif
 
 // Geometry-aware upsampling of irradiance computed at a reduced resolution (factor GI_UP, the
 // low-resolution pixel (u, v) stands for full-resolution pixel (u·GI_UP, v·GI_UP) and carries

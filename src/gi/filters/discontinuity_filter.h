@@ -5,6 +5,7 @@
 //   GeometryAwareUpsampler  reduced-resolution irradiance -> full resolution, same test.
 #pragma once
 #include <map>
+#include <tuple>
 #include <string>
 #include <utility>
 
@@ -28,10 +29,10 @@ public:
 private:
   cl::Context& ctx_;
   std::string label_;
-  std::map<std::pair<int, int>, std::pair<cl::Program, cl::Kernel>> kernels_;  // per window size
-  cl::Kernel prepare_;
-  cl::Buffer planes_;  // padded SoA copy (kernels/gi/filters/discontinuity.cl, GI_FILTER_PAD)
-  static constexpr size_t kPad = 64;
+  // per window size and instance test
+  std::map<std::tuple<int, int, bool>, std::pair<cl::Program, cl::Kernel>> kernels_;
+  static constexpr int kMaxWindow = 16;   // the kernel's largest GI_FILTER_APRON = kMaxWindow / 2
+  static constexpr int kRowsPerItem = 16;  // GI_FILTER_ROWS: output rows per work-item (vector path)
 };
 
 class GeometryAwareUpsampler {
