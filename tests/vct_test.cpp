@@ -567,6 +567,65 @@ TEST(VctVoxelize, RevoxelizingClearsWhatThePreviousSceneTouched) {
       << "level 0 differs from a fresh voxelization";
 }
 
+TEST(VctInject, LanesMatchOneVoxelAtATime) {
+  // vct_inject (GI_VW occupied voxels per work-item, lane-wise resolve, lights and 3×3 PCF
+  // shadows) against vct_inject_voxelwise (vox_resolve, light_incident, shadow_visibility one
+  // voxel at a time over the whole grid), with the frame's shadow maps: the Cornell box with its
+  // spot light (one view), the same light as a point light (6 cube faces) and as a directional
+  // light (orthographic view).
+  cl::Context& ctx = test::context();
+  cl::Program prog = ctx.buildProgram("kernels/gi/vct/voxel_light.cl");
+  cl::Kernel voxelwise = prog.kernel("vct_inject_voxelwise");
+  for (int variant = 0; variant < 3; ++variant) {
+    Scene s = test::cornellWithSpot(true);
+    ASSERT_FALSE(s.lights.empty());
+    if (variant == 1) s.lights[0].type = GI_LIGHT_POINT;
+    if (variant == 2) {
+      s.lights[0].type = GI_LIGHT_DIRECTIONAL;
+      glm::vec3 d = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+      for (int k = 0; k < 3; ++k) {
+        s.lights[0].direction[k] = d[k];
+        s.lights[0].intensity[k] = 2.0f;
+      }
+    }
+    RenderSettings rs;
+    rs.width = 32;
+    rs.height = 32;
+    rs.technique = "direct";
+    rs.sets = {"shadow.resolution=256"};
+    Renderer r(ctx, s, rs);
+    r.renderFrame();
+    const DeviceScene& ds = r.deviceScene();
+    VoxelScene vs(ctx, s, 32);
+    vs.voxelize(ds);
+    vs.inject(ds, r.shadowMaps());
+    size_t n = vs.voxelCount();
+    cl::Buffer reference(ctx, n * 16);
+    voxelwise.args(vs.grid(), vs.accumulators(), ds.lights, int(ds.lightCount), r.shadowMaps().viewTable,
+                   r.shadowMaps().offsetTable, r.shadowMaps().depths, reference);
+    ctx.launch(voxelwise, cl::NDRange::d1(cl::roundUp(n, 64), 64));
+    std::vector<glm::vec4> lanes = ctx.download<glm::vec4>(vs.iso()), ref = ctx.download<glm::vec4>(reference);
+    ctx.profiler().discard();
+    float worst = 0, largest = 0;
+    size_t occupied = 0, partlyShadowed = 0;
+    for (size_t v = 0; v < n; ++v) {
+      occupied += ref[v].w > 0;
+      for (int c = 0; c < 4; ++c) {
+        worst = std::max(worst, std::abs(lanes[v][c] - ref[v][c]));
+        largest = std::max(largest, std::abs(ref[v][c]));
+      }
+    }
+    for (size_t v = 0; v < n; ++v) partlyShadowed += ref[v].x > 0.01f * largest && ref[v].x < 0.5f * largest;
+    std::printf("inject, %s light: %zu occupied voxels, lanes vs one voxel at a time: max abs difference %.2e "
+                "(largest %.3f)\n", variant == 0 ? "spot" : (variant == 1 ? "point" : "directional"), occupied, worst,
+                largest);
+    EXPECT_GT(occupied, 2000u);
+    EXPECT_GT(largest, 0.0f);
+    EXPECT_GT(partlyShadowed, 0u);
+    EXPECT_LE(worst, 1e-5f * largest);
+  }
+}
+
 TEST(VctMips, IsotropicMeanOfChildrenConservesPremultipliedRadiance) {
   cl::Context& ctx = test::context();
   Scene s = boundsScene(glm::vec3(0), glm::vec3(1));

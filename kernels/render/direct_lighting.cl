@@ -6,59 +6,7 @@
 // CPU devices, 1 on GPUs; PERFORMANCE_FACTS.md). The formulas are those of common/brdf.h,
 // common/lights.h and common/shadow.h written lane-wise; lights are uniform across lanes.
 #include "common/brdf.h"
-#include "common/lights.h"
-#include "common/shadow.h"
-#include "common/vector_width.h"
-
-// Row 2 (view-space z) and rows 0, 1, 3 of a column-major matrix applied to (p, 1).
-#define GI_MROW(m, r, p) ((m)[r] * (p).x + (m)[4 + r] * (p).y + (m)[8 + r] * (p).z + (m)[12 + r])
-
-// shadow_pcf_view() lane-wise for view `vi` (the same view for every lane).
-inline floatV shadow_pcf_viewV(global const GiView* views, global const uint* offsets, global const float* depths,
-                               int vi, float3V x, float3V ng) {
-  global const GiView* v = &views[vi];
-  floatV xvz = GI_MROW(v->view, 2, x);
-  floatV texel = v->orthographic ? (floatV)(v->texel_world_size) : v->texel_world_size * fmax(-xvz, 0.0f);
-  floatV off = GI_SHADOW_NORMAL_OFFSET * texel;
-  float3V xo = f3v(x.x + ng.x * off, x.y + ng.y * off, x.z + ng.z * off);
-  floatV cx = GI_MROW(v->view_proj, 0, xo), cy = GI_MROW(v->view_proj, 1, xo), cw = GI_MROW(v->view_proj, 3, xo);
-  floatV ndcx = cx / cw, ndcy = cy / cw;
-  floatV depth = -GI_MROW(v->view, 2, xo) - GI_SHADOW_DEPTH_BIAS * texel;
-  float W = (float)v->width, H = (float)v->height;
-  floatV fx = (ndcx * 0.5f + 0.5f) * W;
-  floatV fy = (0.5f - ndcy * 0.5f) * H;
-  intV lit1 = (cw <= 0.0f) | (fx < 0.0f) | (fy < 0.0f) | (fx >= W) | (fy >= H) | isnan(fx) | isnan(fy);
-  intV ix = convert_intV(floor(GI_SEL(fx, (floatV)(0.0f), lit1)));
-  intV iy = convert_intV(floor(GI_SEL(fy, (floatV)(0.0f), lit1)));
-  global const float* map = depths + offsets[vi];
-  intV x0 = max(ix - 1, 0), x2 = min(ix + 1, v->width - 1);
-  intV r0 = max(iy - 1, 0) * v->width, r1 = iy * v->width, r2 = min(iy + 1, v->height - 1) * v->width;
-  floatV one = (floatV)(1.0f), zero = (floatV)(0.0f);
-#define GI_TAP(r, c) GI_SEL(zero, one, depth <= GI_GATHER(floatV, map, (r) + (c)))
-  floatV lit = GI_TAP(r0, x0) + GI_TAP(r0, ix) + GI_TAP(r0, x2) + GI_TAP(r1, x0) + GI_TAP(r1, ix) + GI_TAP(r1, x2) +
-               GI_TAP(r2, x0) + GI_TAP(r2, ix) + GI_TAP(r2, x2);
-#undef GI_TAP
-  return GI_SEL(lit * (1.0f / 9.0f), one, lit1);
-}
-
-inline floatV shadow_visibilityV(global const GiLight* l, global const GiView* views, global const uint* offsets,
-                                 global const float* depths, float3V x, float3V ng) {
-  if (l->shadow_map < 0) return (floatV)(1.0f);
-  int vi = l->shadow_map;
-  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
-  if (!cube) return shadow_pcf_viewV(views, offsets, depths, vi, x, ng);
-  // shadow_cube_face() per lane; each face present among the lanes is evaluated once.
-  float3V d = f3v(x.x - l->position[0], x.y - l->position[1], x.z - l->position[2]);
-  floatV ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
-  intV face = GI_SEL(GI_SEL((intV)(5), (intV)(4), d.z > 0.0f), GI_SEL((intV)(3), (intV)(2), d.y > 0.0f), ay >= az);
-  face = GI_SEL(face, GI_SEL((intV)(1), (intV)(0), d.x > 0.0f), (ax >= ay) & (ax >= az));
-  floatV vis = (floatV)(1.0f);
-  for (int f = 0; f < 6; ++f) {
-    intV here = face == f;
-    if (GI_ANY(here)) vis = GI_SEL(vis, shadow_pcf_viewV(views, offsets, depths, vi + f, x, ng), here);
-  }
-  return vis;
-}
+#include "common/lights_lanes.h"
 
 kernel void direct_lighting(GiView camera, global const float4* gPosition, global const float4* gGeoNormal,
                             global const float4* gNormal, global const float4* gAlbedo,
@@ -105,28 +53,8 @@ kernel void direct_lighting(GiView camera, global const float4* gPosition, globa
   float3V L = em;
   for (int li = 0; li < lightCount; ++li) {
     global const GiLight* l = &lights[li];
-    float3V wi, E;
-    if (l->type == GI_LIGHT_DIRECTIONAL) {
-      wi = f3v((floatV)(-l->direction[0]), (floatV)(-l->direction[1]), (floatV)(-l->direction[2]));
-      E = f3v((floatV)(l->intensity[0]), (floatV)(l->intensity[1]), (floatV)(l->intensity[2]));
-    } else {  // light_incident() and light_intensity_towards()
-      float3V d = f3v(l->position[0] - x.x, l->position[1] - x.y, l->position[2] - x.z);
-      floatV d2 = fmax(dotV(d, d), 1e-12f);
-      floatV inv = rsqrt(d2);
-      wi = f3v(d.x * inv, d.y * inv, d.z * inv);
-      floatV s = (floatV)(1.0f);
-      if (l->type == GI_LIGHT_SPOT) {
-        floatV c = -(wi.x * l->direction[0] + wi.y * l->direction[1] + wi.z * l->direction[2]);
-        if (l->falloff == GI_SPOT_FALLOFF_COSINE) {
-          s = fmax(c, 0.0f);
-        } else {
-          float scale = 1.0f / fmax(1e-3f, l->cos_inner - l->cos_outer);
-          floatV t = clamp((c - l->cos_outer) * scale, 0.0f, 1.0f);
-          s = t * t;
-        }
-      }
-      E = f3v(l->intensity[0] * s / d2, l->intensity[1] * s / d2, l->intensity[2] * s / d2);
-    }
+    float3V wi;
+    float3V E = light_incidentV(l, x, &wi);
     floatV cosTheta = dotV(n, wi);
     intV lit = surface & (cosTheta > 0.0f) & (dotV(ng, wi) > 0.0f) & (E.x + E.y + E.z > 0.0f);
     if (!GI_ANY(lit)) continue;

@@ -19,18 +19,18 @@
 // vct_mip_sh_isotropic / vct_mip_sh_anisotropic: the same two filters on the coefficients (linear
 //   in them, so the parent's coefficients are those of the filtered directional radiance), the
 //   anisotropic compositing weighted by the opacity of the front child from the radiance mips.
-#include "common/lights.h"
-#include "common/shadow.h"
+#include "common/lights_lanes.h"
 #include "gi/vct/voxel_grid.h"
 
-kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const uint* occupied,
-                       global const uint* occupiedCount, global const GiLight* lights, int lightCount,
-                       global const GiView* shadowViews, global const uint* shadowOffsets,
-                       global const float* shadowDepths, global float4* level0) {
-  size_t i = get_global_id(0);
-  if (i >= occupiedCount[0]) return;
-  size_t v = occupied[i];
-  if (acc[v * GI_VOX_RECORD + GI_VOX_OPACITY] == 0u) {  // only cut-away triangles: empty
+// The injection one voxel at a time over the whole grid (vox_resolve, light_incident,
+// shadow_visibility): the tests' reference for vct_inject's lanes.
+kernel void vct_inject_voxelwise(GiVoxelGrid grid, global const uint* acc, global const GiLight* lights,
+                                 int lightCount, global const GiView* shadowViews, global const uint* shadowOffsets,
+                                 global const float* shadowDepths, global float4* level0) {
+  int N = grid.resolution;
+  size_t v = get_global_id(0);
+  if (v >= (size_t)N * N * N) return;
+  if (acc[v * GI_VOX_RECORD + GI_VOX_OPACITY] == 0u) {
     level0[v] = (float4)(0.0f);
     return;
   }
@@ -51,6 +51,73 @@ kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const ui
   }
   float3 L = vs.albedo * GI_INV_PI * E + vs.emission;
   level0[v] = (float4)(L * vs.alpha, vs.alpha);
+}
+
+// GI_VW consecutive entries of the occupied list per work-item (the list is in voxel order, so
+// the lanes' records are near each other): vox_resolve, light_incident and shadow_visibility
+// lane-wise (common/lights_lanes.h), the lights uniform across lanes. Launched over N³ / GI_VW
+// items, as the count is on the device.
+kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const uint* occupied,
+                       global const uint* occupiedCount, global const GiLight* lights, int lightCount,
+                       global const GiView* shadowViews, global const uint* shadowOffsets,
+                       global const float* shadowDepths, global float4* level0) {
+  int first = get_global_id(0) * GI_VW, count = (int)occupiedCount[0];
+  if (first >= count) return;
+  int valid = min(GI_VW, count - first);
+  // Lanes past the end repeat the last entry (computed, not stored).
+  intV entry = min(first + GI_LANES, count - 1);
+  intV v = GI_GATHER(intV, (global const int*)occupied, entry);  // < 2^24
+  // The records (voxel_types.h), 4 words at a time, as int (the unsigned fields reinterpreted).
+  intV albR, albG, albB, emR, emG, emB, nX, nY, nZ, oX, oY, oZ, opacity, triangles, pad0, pad1;
+  global const int* words = (global const int*)acc;
+  intV word = v * GI_VOX_RECORD;
+  GI_GATHER_SPAN4(int, words, word, albR, albG, albB, emR)
+  GI_GATHER_SPAN4(int, words, word + 4, emG, emB, nX, nY)
+  GI_GATHER_SPAN4(int, words, word + 8, nZ, oX, oY, oZ)
+  GI_GATHER_SPAN4(int, words, word + 12, opacity, triangles, pad0, pad1)
+  // vox_resolve lane-wise.
+  intV covered = opacity != 0;
+  floatV weight = convert_floatV(as_uintV(opacity)) * (1.0f / GI_VOX_UNIT);
+  floatV alpha = weight / convert_floatV(max(as_uintV(triangles), 1u));
+  floatV invW = 1.0f / GI_SEL((floatV)(1.0f), weight, covered);
+  floatV kAlbedo = invW / GI_VOX_UNIT, kEmission = invW / GI_VOX_EMISSION_UNIT, kSigned = invW * 4.0f / GI_VOX_UNIT;
+  float3V albedo = f3v(convert_floatV(as_uintV(albR)) * kAlbedo, convert_floatV(as_uintV(albG)) * kAlbedo,
+                       convert_floatV(as_uintV(albB)) * kAlbedo);
+  float3V emission = f3v(convert_floatV(as_uintV(emR)) * kEmission, convert_floatV(as_uintV(emG)) * kEmission,
+                         convert_floatV(as_uintV(emB)) * kEmission);
+  float3V meanN = f3v(convert_floatV(nX) * kSigned, convert_floatV(nY) * kSigned, convert_floatV(nZ) * kSigned);
+  float3V offset = f3v(convert_floatV(oX) * kSigned, convert_floatV(oY) * kSigned, convert_floatV(oZ) * kSigned);
+  int N = grid.resolution, shift = 31 - clz(N);
+  intV mask = (intV)(N - 1);
+  float s = grid.voxel_size;
+  float3V p = f3v(grid.origin[0] + (convert_floatV(v & mask) + 0.5f + offset.x) * s,
+                  grid.origin[1] + (convert_floatV((v >> shift) & mask) + 0.5f + offset.y) * s,
+                  grid.origin[2] + (convert_floatV(v >> (2 * shift)) + 0.5f + offset.z) * s);
+  intV twoSided = sqrt(dotV(meanN, meanN)) < 0.5f;
+  float3V n = safe_normalizeV(meanN, f3v((floatV)(0.0f), (floatV)(1.0f), (floatV)(0.0f)));
+  float3V E = f3v((floatV)(0.0f), (floatV)(0.0f), (floatV)(0.0f));
+  for (int li = 0; li < lightCount; ++li) {
+    global const GiLight* l = &lights[li];
+    float3V wi;
+    float3V Ein = light_incidentV(l, p, &wi);
+    floatV cn = dotV(n, wi);
+    floatV c = GI_SEL(cn, fabs(cn), twoSided);
+    intV lit = covered & (c > 0.0f) & (Ein.x + Ein.y + Ein.z > 0.0f);
+    if (!GI_ANY(lit)) continue;
+    c = GI_SEL((floatV)(0.0f), c, lit);
+    floatV visibility = shadow_visibilityV(l, shadowViews, shadowOffsets, shadowDepths, p, selV(negV(n), n, cn >= 0.0f));
+    E = f3v(E.x + Ein.x * c * visibility, E.y + Ein.y * c * visibility, E.z + Ein.z * c * visibility);
+  }
+  floatV zero = (floatV)(0.0f);
+  alpha = GI_SEL(zero, alpha, covered);
+  float out[4][GI_VW];
+  vstoreV((albedo.x * GI_INV_PI * E.x + emission.x) * alpha, 0, out[0]);
+  vstoreV((albedo.y * GI_INV_PI * E.y + emission.y) * alpha, 0, out[1]);
+  vstoreV((albedo.z * GI_INV_PI * E.z + emission.z) * alpha, 0, out[2]);
+  vstoreV(alpha, 0, out[3]);
+  int voxels[GI_VW];
+  vstoreV(v, 0, voxels);
+  for (int l = 0; l < valid; ++l) level0[voxels[l]] = (float4)(out[0][l], out[1][l], out[2][l], out[3][l]);
 }
 
 // The 8 children of parent cell `cell` in the volume of edge nc, child k = dx + 2·dy + 4·dz.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "cl/gather_width.h"
 #include "gi/emitter_flags.h"
 #include "util/error.h"
 
@@ -59,7 +60,8 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   occupancyScan_ = voxelizeProgram_.kernel("vct_occupancy_scan");
   occupancyList_ = voxelizeProgram_.kernel("vct_occupancy_list");
   voxelize_ = voxelizeProgram_.kernel("vct_voxelize");
-  lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl");
+  lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl", cl::withGatherWidth(ctx));
+  injectLanes_ = cl::gatherVectorWidth(ctx);
   inject_ = lightProgram_.kernel("vct_inject");
   mipIso_ = lightProgram_.kernel("vct_mip_isotropic");
   mipAnisoFirst_ = lightProgram_.kernel("vct_mip_anisotropic_first");
@@ -110,7 +112,7 @@ void VoxelScene::inject(const DeviceScene& scene, const ShadowMapSet& shadows) {
   uint32_t n = uint32_t(voxelCount());
   inject_.args(grid_, acc_, occupied_, occupiedCount_, scene.lights, int(scene.lightCount), shadows.viewTable, shadows.offsetTable,
                shadows.depths, iso_);
-  ctx_.launch(inject_, cl::NDRange::d1(cl::roundUp(n, 256), 256), "vct: inject");
+  ctx_.launch(inject_, cl::NDRange::d1(cl::roundUp((n + injectLanes_ - 1) / injectLanes_, 64), 64), "vct: inject");
 }
 
 void VoxelScene::buildMips(bool anisotropic) {

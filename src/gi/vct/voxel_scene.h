@@ -65,6 +65,7 @@ private:
   cl::Context& ctx_;
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
+  int injectLanes_ = 1;  // GI_VW of lightProgram_ (occupied voxels per vct_inject work-item)
   cl::Kernel clear_, occupancyCount_, occupancyScan_, occupancyList_, voxelize_, inject_, mipIso_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
   // occupied_: the voxels the last voxelization touched (count in occupiedCount_), in increasing
   // order, built from their bits in occupancy_ (1 bit per voxel) through per-span counts.
