@@ -77,10 +77,10 @@ inline void ssao_store1(global float* plane, int i, int valid, floatV v) {
 // kernels do not need cl_khr_fp16; ssao_half_value reads the half in the upper 16 bits of h). Magnitudes below the smallest normal half (6.1e-5 per pixel:
 // a relative depth change under 5e-5 within the 0.71 px a sample is extrapolated) become 0, above
 // 65504 they are clamped; rounding to nearest.
-inline uint ssao_half_bits(float v) {
-  float a = fmin(fabs(v), 65504.0f);
-  uint h = a < 6.103515625e-05f ? 0u : (as_uint(a) - (112u << 23) + 0x1000u) >> 13;
-  return h | ((as_uint(v) >> 16) & 0x8000u);
+inline uintV ssao_half_bits(floatV v) {
+  floatV a = fmin(fabs(v), 65504.0f);
+  uintV h = GI_SEL((as_uintV(a) - (112u << 23) + 0x1000u) >> 13, (uintV)(0u), a < 6.103515625e-05f);
+  return h | ((as_uintV(v) >> 16) & 0x8000u);
 }
 
 inline floatV ssao_half_value(uintV h) {
@@ -97,22 +97,36 @@ inline floatV ssao_half_value(uintV h) {
 // 1/depth is affine in screen coordinates over a plane (perspective-correct interpolation), so
 //   1/depth of that plane at pixel coordinates s = A·(1 + g·(s − centre of q))   exactly;
 // for the plane n·c = w: 1/depth(s) = n·r(s)/w with the ray r(s) = ((sx − cx)/fx, (cy − sy)/fy, 1),
-// hence g = (n.x/fx, −n.y/fy)/(n·r(q)). One pixel per work-item and no loop: PoCL vectorizes it.
+// hence g = (n.x/fx, −n.y/fy)/(n·r(q)). GI_VW pixels of a row per work-item (lanes).
 kernel void ssao_depth_planes(int width, int height, GiView camera, float4 projection, global const float* depth,
                               global const float4* geoNormal, global uint2* records) {
-  int x = get_global_id(0), y = get_global_id(1);
-  if (x >= width || y >= height) return;
-  int i = y * width + x;
-  float z = depth[i];
-  float3 w = geoNormal[i].xyz;
+  int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
+  if (px0 >= width || y >= height) return;
+  int i0 = y * width + px0, valid = min(GI_VW, width - px0);
+  float tmp[4 * GI_VW];
+  floatV z = ssao_load1(depth, i0, valid), wx, wy, wz, unused;
+  SSAO_LOAD4(geoNormal, i0, valid, wx, wy, wz, unused)
   const float* V = camera.view;
-  float nx = V[0] * w.x + V[4] * w.y + V[8] * w.z, ny = V[1] * w.x + V[5] * w.y + V[9] * w.z;
-  float nz = -(V[2] * w.x + V[6] * w.y + V[10] * w.z);
-  float rx = ((float)x + 0.5f - projection.z) / projection.x, ry = (projection.w - (float)y - 0.5f) / projection.y;
-  float nr = nx * rx + ny * ry + nz;
+  floatV nx = V[0] * wx + V[4] * wy + V[8] * wz, ny = V[1] * wx + V[5] * wy + V[9] * wz;
+  floatV nz = -(V[2] * wx + V[6] * wy + V[10] * wz);
+  const float fx = projection.x, fy = projection.y;
+  floatV rx = (convert_floatV(px0 + GI_LANES) + (0.5f - projection.z)) * (1.0f / fx);
+  float ry = (projection.w - (float)y - 0.5f) * (1.0f / fy);
+  floatV nr = nx * rx + ny * ry + nz;
   nr = copysign(fmax(fabs(nr), 1e-12f), nr);  // a plane seen edge-on: clamped gradients
-  uint g = ssao_half_bits(nx / (projection.x * nr)) | (ssao_half_bits(-ny / (projection.y * nr)) << 16);
-  records[i] = isfinite(z) ? (uint2)(as_uint(1.0f / z), g) : (uint2)(0u, 0u);
+  floatV inr = 1.0f / nr;
+  uintV g = ssao_half_bits(nx * inr * (1.0f / fx)) | (ssao_half_bits(-ny * inr * (1.0f / fy)) << 16);
+  intV surface = isfinite(z);
+  uintV w0 = GI_SEL((uintV)(0u), as_uintV(1.0f / z), surface), w1 = GI_SEL((uintV)(0u), g, surface);
+  global uint* out = (global uint*)(records + i0);
+#if GI_VW == 1
+  vstore2((uint2)(w0, w1), 0, out);
+#else
+  uint t0[GI_VW], t1[GI_VW];
+  vstoreV(w0, 0, t0);
+  vstoreV(w1, 0, t1);
+  for (int l = 0; l < valid; ++l) vstore2((uint2)(t0[l], t1[l]), l, out);
+#endif
 }
 
 // kernelVectors: GI_SSAO_SAMPLES float4 (tangent-space x, y, z along n_g, already scaled by the

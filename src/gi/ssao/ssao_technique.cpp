@@ -105,8 +105,7 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
   std::array<float, 4> p = ssaoProjection(g.view);
   cl_float4 projection{{p[0], p[1], p[2], p[3]}};
   planesKernel_.args(g.width, g.height, g.view, projection, g.visibility.depth, g.geoNormal, records_);
-  f.ctx.launch(planesKernel_, cl::NDRange::d2(cl::roundUp(g.width, 32), cl::roundUp(g.height, 4), 32, 4),
-               "ssao: depth planes");
+  f.ctx.launch(planesKernel_, pixelGroups(f.ctx.vectorWidth(), g), "ssao: depth planes");
   occlusionKernel_.args(g.width, g.height, g.view, projection, g.visibility.depth, g.geoNormal, records_,
                         kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), g.position, g.normal,
                         f.direct, rawOcclusion_, rawIrradiance_);
