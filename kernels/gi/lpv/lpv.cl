@@ -374,16 +374,15 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
   o[LPV_COEF(b2)] += f2p - f2m;
 }
 
-// One gather step. Work-item = LPV_LANES destination cells of a row (global (N / LPV_LANES, N,
-// N·cascades)). The 30 face transmittances T_f first (from the shared faces' blocking potential,
+// One gather step of cascade k. Work-item = LPV_LANES destination cells of a row (global
+// (N / LPV_LANES, N, N)). The 30 face transmittances T_f first (from the shared faces' blocking potential,
 // kept in private memory), then channel after channel, so that only 4 accumulators and one
 // neighbour's 4 coefficients are live (16 float16 would not fit AVX2's registers). `blocking` = 0
 // uses the unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them —
 // or occlusion off).
 kernel void lpv_propagate(global const float* src, global float* dst, global float* accumulated,
-                          global const float* faceGeometry, int blocking) {
-  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1);
-  int z = get_global_id(2) % LPV_N, k = get_global_id(2) / LPV_N;
+                          global const float* faceGeometry, int k, int blocking) {
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2);
   int cell = (z * LPV_N + y) * LPV_N + x0;
   intL x = x0 + LPV_LANE_IDS;
   intL insideLeft = x >= 1, insideRight = x < LPV_N - 1;  // neighbours at x − 1 (dir 0), x + 1 (dir 1)

@@ -141,7 +141,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   ctx.fill(faceGeometry_, 0.0f);  // padding and skew stay 0
   lookupGrid_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv lookup grid");
   // One row of cells per work-group: many groups, which PoCL spreads over the cores.
-  propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * cascades_);
+  propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_));  // one cascade
   propagateRange_.local[0] = size_t(n_ / lanes_);
   propagateRange_.local[1] = propagateRange_.local[2] = 1;
 }
@@ -240,12 +240,19 @@ void LpvVolume::propagate(int iterations, bool blocking) {
     faceGeometryKernel_.args(geometry_, faceGeometry_);
     ctx_.launch(faceGeometryKernel_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: propagate");
   }
-  for (int i = 0; i < iterations; ++i) {
-    // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
-    propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_,
-                    int(blocking && i > 0));
-    ctx_.launch(propagate_, propagateRange_, "lpv: propagate");
-    current_ = 1 - current_;
+  // Cascade after cascade, all steps of one before the next: a step touches 6 MB per 32³ cascade
+  // (two grids, the accumulated grid, the face potentials), which the last-level cache holds for
+  // one cascade but not for three (all cascades in one launch per step: 0.92 instead of 0.50–0.58 ms
+  // per step and cascade on the idle machine). The cascades do not interact.
+  int start = current_;
+  for (int k = 0; k < cascades_; ++k) {
+    current_ = start;
+    for (int i = 0; i < iterations; ++i) {
+      // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
+      propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k, int(blocking && i > 0));
+      ctx_.launch(propagate_, propagateRange_, "lpv: propagate");
+      current_ = 1 - current_;
+    }
   }
 }
 
