@@ -4,7 +4,12 @@
 // Cornell box. Not a test: the machine is noisy; docs/PERFORMANCE.md records the numbers.
 //
 //   build/vct_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 5] [--quick]
+//                   [--only voxelize]
 // --quick: only the default configuration and the targets (128³).
+// --only voxelize: only the voxelization passes at 128³ (clear, voxelize, occupied list), repeated
+//   `frames` times without rendering; prints the minimum beside the median (on a shared machine the
+//   minimum is the better estimate of the unloaded time).
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -33,6 +38,22 @@ int main(int argc, char** argv) {
                   "anisotropic %7.1f MB\n", res, VoxelScene::bytesFor(res, false) / 1e6,
                   VoxelScene::bytesFor(res, true) / 1e6, VoxelScene::bytesFor(res, false, true) / 1e6,
                   VoxelScene::bytesFor(res, true, true) / 1e6);
+    if (args.only == "voxelize") {
+      DeviceScene ds(ctx, scene);
+      VoxelScene vs(ctx, scene, 128);
+      for (int i = 0; i < a.warmup; ++i) vs.voxelize(ds);
+      ctx.profiler().discard();
+      std::map<std::string, std::vector<double>> per;
+      for (int f = 0; f < a.frames; ++f) {
+        vs.voxelize(ds);
+        for (auto& [name, ms] : ctx.profiler().collect()) per[name].push_back(ms);
+      }
+      std::printf("\n128^3 voxelization only, %d repetitions\n", a.frames);
+      for (auto& [name, ms] : per)
+        std::printf("  %-34s median %8.3f ms, min %8.3f ms\n", name.c_str(), timing::median(ms),
+                    *std::min_element(ms.begin(), ms.end()));
+      return 0;
+    }
     struct Config {
       std::vector<std::string> sets;
       std::string title;
