@@ -572,18 +572,10 @@ kernel void lpv_lookup(int width, int height, global const float* position, glob
   intV pixel = y * width + min(x, width - 1);  // lanes past the row's end re-read its last pixel, not stored
   float3V p, ng, n, rho;
   floatV pw, unused;
-  if (x0 + GI_VW <= width) {  // GI_VW consecutive pixels: contiguous loads
-    size_t at = ((size_t)y * width + x0) * 4;
-    GI_AOS4_LOAD(position + at, p.x, p.y, p.z, pw);
-    GI_AOS4_LOAD(geoNormal + at, ng.x, ng.y, ng.z, unused);
-    GI_AOS4_LOAD(normal + at, n.x, n.y, n.z, unused);
-    GI_AOS4_LOAD(albedo + at, rho.x, rho.y, rho.z, unused);
-  } else {
-    GI_GATHER_AOS4(float, position, pixel, p.x, p.y, p.z, pw);
-    GI_GATHER_AOS4(float, geoNormal, pixel, ng.x, ng.y, ng.z, unused);
-    GI_GATHER_AOS4(float, normal, pixel, n.x, n.y, n.z, unused);
-    GI_GATHER_AOS4(float, albedo, pixel, rho.x, rho.y, rho.z, unused);
-  }
+  GI_GATHER_AOS4(float, position, pixel, p.x, p.y, p.z, pw);
+  GI_GATHER_AOS4(float, geoNormal, pixel, ng.x, ng.y, ng.z, unused);
+  GI_GATHER_AOS4(float, normal, pixel, n.x, n.y, n.z, unused);
+  GI_GATHER_AOS4(float, albedo, pixel, rho.x, rho.y, rho.z, unused);
   intV covered = pw > 0.0f;
   p = selV(f3v(0.0f, 0.0f, 0.0f), p, covered);  // empty pixels: any finite point, result dropped
   intV k = 0;
