@@ -393,8 +393,9 @@ kernel void lpv_propagate(global const float* src, global float* dst, global flo
   for (int dir = 0; dir < 6; ++dir) {
     // The shared face: the lower face along a of the cell itself (light along +a) or of the cell
     // above. Without blocking, and for rows outside the grid, the potential is zero (T_f = ΔΩ_f/π
-    // exactly) and the cell's own face is read in place of one that may lie past the buffer: no
-    // branch, so the 30 factors stay in registers (with an if/else here the step cost 3× more).
+    // exactly) and the cell's own face is read in place of one that may lie past the buffer. No
+    // branch: with an if/else choosing between computed and constant factors here the step cost
+    // about 1.5–2× more (docs/PERFORMANCE.md).
     bool blocked = blocking && inside[dir];
     global const float* face =
         faceGeometry + LPV_PAD + LPV_PLANE(k, dir / 2, 0) + cell + (blocked && dir % 2 ? stride[dir / 2] : 0);
