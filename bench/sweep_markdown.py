@@ -5,7 +5,8 @@ Reads DIR/runs/*/result.json (what the sweep writes per configuration as it goes
 summarizes a sweep that is still running or was interrupted. One table per scene and resolution:
 technique, the parameters the spec set, device ms per frame (sum of kernels, median), the
 technique's own passes (kernels not named "shadow maps"/"gbuffer"/"direct"), frame wall ms,
-device memory, and the quality metrics against the sweep's reference.
+device memory, the quality metrics against the sweep's reference (and its spp), and the
+statistics a technique reports about its last frame (e.g. second-order's re-shaded share).
 
 Usage: bench/sweep_markdown.py DIR [--spec-params-only]
 """
@@ -42,20 +43,30 @@ def main():
         groups.setdefault((c["scene_label"], c["width"], c["height"]), []).append(r)
     for (scene, w, h), rs in groups.items():
         print(f"\n### {scene}, {w}×{h}\n")
-        print("| technique | parameters | device ms / frame | technique passes ms | frame wall ms | device MB | SSIM | FLIP | relMSE |")
-        print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+        spps = sorted({(r.get("bench", {}).get("quality") or {}).get("reference_spp") for r in rs} - {None})
+        if spps:
+            print(f"Reference: {', '.join(str(s) for s in spps)} spp.\n")
+        stats = []
+        for r in rs:
+            for k in r.get("bench", {}).get("statistics", {}):
+                if k not in stats:
+                    stats.append(k)
+        extra = "".join(f" {k} |" for k in stats)
+        print("| technique | parameters | device ms / frame | technique passes ms | frame wall ms | device MB | SSIM | FLIP | relMSE |" + extra)
+        print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |" + " ---: |" * len(stats))
         for r in rs:
             c = r["configuration"]
             params = " ".join(f"{k}={v}" for k, v in c["params"].items()) or "—"
             if r["status"] != "ok" or "bench" not in r:
-                print(f"| {c['technique']} | {params} | failed: {r.get('message', '')[:80]} | | | | | | |")
+                print(f"| {c['technique']} | {params} | failed: {r.get('message', '')[:80]} | | | | | | |" + " |" * len(stats))
                 continue
             b = r["bench"]
             own = sum(k["median_ms"] for k in b["kernels"] if not k["name"].startswith(FOUNDATION))
             q = b.get("quality") or {}
             print(f"| {c['technique']} | {params} | {fmt(b['device_total_ms']['median_ms'])} | {fmt(own)} | "
                   f"{fmt(b['frame_wall_ms']['median_ms'])} | {fmt(b.get('device_bytes', 0) / 1e6)} | "
-                  f"{fmt(q.get('ssim'), 4)} | {fmt(q.get('flip'), 4)} | {fmt(q.get('relmse'), 4)} |")
+                  f"{fmt(q.get('ssim'), 4)} | {fmt(q.get('flip'), 4)} | {fmt(q.get('relmse'), 4)} |"
+                  + "".join(f" {b.get('statistics', {}).get(k, float('nan')):.4g} |" for k in stats))
     print(f"\n{len(rows)} configuration(s) finished.")
 
 

@@ -82,6 +82,33 @@ TEST(Bench, WritesConsistentStatisticsAndQuality) {
   fs::remove_all(dir);
 }
 
+// Technique statistics: second-order reports its re-shaded share. Without multi-resolution every
+// surface pixel is shaded at full resolution (exactly 1); with it, a strict part of them.
+TEST(Bench, WritesTechniqueStatistics) {
+  auto dir = test::tempDir("bench_statistics");
+  const std::string env = "GI_DEVICE=cpu";
+  auto bench = [&](const std::string& sets, const std::string& name) {
+    test::CommandResult r = test::runGi("bench --technique second-order --set second-order.count=32" + sets + kSmall +
+                                            " --frames 1 --warmup 1 --json " + (dir / name).string(),
+                                        env);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("second-order.reshaded_fraction"), std::string::npos) << r.output;
+    return json::parse(std::ifstream(dir / name));
+  };
+  json full = bench(" --set second-order.multires=false --set second-order.negative=8", "full.json");
+  EXPECT_EQ(full["statistics"]["second-order.reshaded_fraction"].get<double>(), 1.0) << full["statistics"];
+  EXPECT_GT(full["statistics"]["second-order.negative_lights"].get<double>(), 0.0);
+  EXPECT_LE(full["statistics"]["second-order.negative_lights"].get<double>(), 8.0);
+  json multires = bench(" --set second-order.negative=0", "multires.json");
+  const double share = multires["statistics"]["second-order.reshaded_fraction"].get<double>();
+  EXPECT_GT(share, 0.0);  // the Cornell box's edges and corners differ from their half-res parents
+  EXPECT_LT(share, 1.0);
+  EXPECT_EQ(multires["statistics"]["second-order.negative_lights"].get<double>(), 0.0);
+  EXPECT_NEAR(multires["statistics"]["second-order.reshaded_pixels"].get<double>(),
+              share * full["statistics"]["second-order.reshaded_pixels"].get<double>(), 1e-6);
+  fs::remove_all(dir);
+}
+
 TEST(Bench, BadInputWritesNothing) {
   auto dir = test::tempDir("bench_bad");
   auto json = dir / "b.json";

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -101,6 +102,33 @@ TEST(SweepSpec, RejectsMalformedSpecsNamingTheProblem) {
                   "vpl.count");
   expectSpecError(json::parse(R"({"resolutions": ["8x8"], "techniques": ["direct", "direct"]})"), "appears twice");
   expectSpecError(json::parse(R"({"resolutions": ["8x8"], "techniques": ["direct"], "frames": 0})"), "frames");
+}
+
+// A reference spp override applies to its scene and/or resolution only, and gives those
+// configurations their own reference key; malformed overrides name the problem.
+TEST(SweepSpec, ReferenceSppOverridesMatchTheirSceneAndResolution) {
+  sweep::Spec s = sweep::parseSpec(json::parse(R"({"scenes": [{"path": "", "label": "box"}, {"path": "scenes/sponza.json", "label": "room"}],
+      "resolutions": ["8x8", "16x8"], "techniques": ["direct"],
+      "reference": {"spp": 64, "spp_overrides": [{"scene": "room", "resolution": "16x8", "spp": 4},
+                                                 {"resolution": "16x8", "spp": 16}]}})"));
+  ASSERT_EQ(s.configurations.size(), 4u);
+  std::map<std::string, int> spp;
+  std::set<std::string> keys;
+  for (auto& c : s.configurations) {
+    spp[c.sceneLabel + " " + std::to_string(c.width)] = s.reference.sppFor(c);
+    keys.insert(sweep::referenceKey(c, s.reference));
+  }
+  EXPECT_EQ(spp["box 8"], 64);
+  EXPECT_EQ(spp["box 16"], 16);  // the second override (any scene at 16x8)
+  EXPECT_EQ(spp["room 8"], 64);
+  EXPECT_EQ(spp["room 16"], 4);  // the first override wins
+  EXPECT_EQ(keys.size(), 4u);
+  const std::string base = R"({"resolutions": ["8x8"], "techniques": ["direct"], "reference": {"spp": 8, "spp_overrides": )";
+  expectSpecError(json::parse(base + R"([{"scene": "nowhere", "spp": 2}]}})"), "nowhere");
+  expectSpecError(json::parse(base + R"([{"spp": 2}]}})"), "'scene' or a 'resolution'");
+  expectSpecError(json::parse(base + R"([{"resolution": "8x8"}]}})"), "spp");
+  expectSpecError(json::parse(base + R"([{"resolution": "8x8", "spp": 2, "colour": 1}]}})"), "colour");
+  expectSpecError(json::parse(base + R"({"resolution": "8x8"}}})"), "must be a list");
 }
 
 TEST(SweepSpec, ShardsAreDisjointAndCoverTheSweep) {

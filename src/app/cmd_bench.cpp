@@ -146,6 +146,7 @@ void run(BenchArgs& a) {
   }
 
   Image linear = renderer.radiance();
+  const std::vector<TechniqueStatistic> statistics = renderer.techniqueStatistics();
   Image flipMap;
   Json quality;
   if (!a.referencePath.empty())
@@ -187,6 +188,10 @@ void run(BenchArgs& a) {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   j["host_peak_rss_bytes"] = uint64_t(usage.ru_maxrss) * 1024;  // Linux reports KiB
+  if (!statistics.empty()) {
+    j["statistics"] = Json::object();
+    for (auto& st : statistics) j["statistics"][st.name] = st.value;
+  }
   if (!a.imagePath.empty()) j["image"] = a.imagePath;
   if (!quality.is_null()) {
     if (!a.heatmapPath.empty()) quality["heatmap"] = a.heatmapPath;
@@ -206,6 +211,8 @@ void run(BenchArgs& a) {
   for (auto& p : j["passes"]) row("pass " + p["name"].get<std::string>(), p);
   row("sum of kernels", j["device_total_ms"]);
   row("frame (wall)", j["frame_wall_ms"]);
+  if (!statistics.empty()) std::printf("last frame:\n");
+  for (auto& st : statistics) std::printf("  %-40s %12.6g   %s\n", st.name.c_str(), st.value, st.meaning.c_str());
   if (!quality.is_null())
     std::printf("quality vs %s: ssim %.4f  flip %.4f  grade %.3f  relmse %.4g\n", a.referencePath.c_str(),
                 quality.value("ssim", NAN), quality.value("flip", NAN), quality.value("grade", NAN),

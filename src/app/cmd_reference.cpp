@@ -10,6 +10,11 @@
 //   expanded kernel source. It is looked up before loading the scene, and a hit is copied to
 //   --out at once. --no-cache neither reads nor writes it. Interrupted renders are not cached.
 // - Samples per launch adapt so one launch takes about 0.3 s; results do not depend on it.
+// - --checkpoint FILE: resume from FILE when it holds an earlier run of the same reference (same
+//   key as the cache, spp aside), save the running sums there every --checkpoint-seconds and on
+//   Ctrl-C, and delete it when done (--keep-checkpoint keeps it, to add samples later with a
+//   larger --spp). Resuming gives the same bits as one uninterrupted run. `gi sweep` uses it, so
+//   an hours-long reference survives the sweep being stopped.
 // Hidden `gi export-scene SCENE --out DIR`: the flattened scene as one OBJ per instance plus
 // scene.json (materials, cameras, lights), for bench/cross_check_mitsuba.py.
 #include <atomic>
@@ -44,9 +49,56 @@ struct ReferenceArgs {
   std::string scene, camera, mode = "full", out, variance;
   int width = 0, height = 0, spp = 256, maxBounces = 8;
   uint32_t seed = 0;
-  bool diffuseOnly = false, noCache = false;
+  bool diffuseOnly = false, noCache = false, keepCheckpoint = false;
+  std::string checkpoint;
+  double checkpointSeconds = 60.0;
   CommonOptions common;
 };
+
+// A checkpoint: one text line naming the reference (everything of the cache key but the spp),
+// one line "width height samples", then Σ L and Σ L² as raw float4 per pixel.
+constexpr const char* kCheckpointMagic = "gi path tracer checkpoint 1";
+
+void writeCheckpoint(const std::string& path, const std::string& identity, int width, int height,
+                     const PathTracer::Accumulation& acc) {
+  writeAtomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream o(tmp, std::ios::binary);
+    o << kCheckpointMagic << "\n" << identity << "\n" << width << " " << height << " " << acc.samples << "\n";
+    o.write(reinterpret_cast<const char*>(acc.sum.data()), std::streamsize(acc.sum.size() * sizeof(float)));
+    o.write(reinterpret_cast<const char*>(acc.sumSq.data()), std::streamsize(acc.sumSq.size() * sizeof(float)));
+    if (!o) throw Error("cannot write the checkpoint " + tmp.string());
+  });
+}
+
+// Reads a checkpoint of this reference; throws gi::Error naming the file if it is another
+// reference's, truncated, or has more samples than asked for.
+PathTracer::Accumulation readCheckpoint(const std::string& path, const std::string& identity, int width, int height,
+                                        int spp) {
+  std::ifstream in(path, std::ios::binary);
+  std::string magic, id, dims;
+  if (!std::getline(in, magic) || magic != kCheckpointMagic || !std::getline(in, id) || !std::getline(in, dims))
+    throw Error("--checkpoint " + path + ": not a gi path tracer checkpoint");
+  if (id != identity)
+    throw Error("--checkpoint " + path + ": it belongs to another reference (scene, camera, size, mode, bounces, seed or "
+                "path tracer code differ); delete it or name another file");
+  int w = 0, h = 0;
+  PathTracer::Accumulation acc;
+  if (std::sscanf(dims.c_str(), "%d %d %d", &w, &h, &acc.samples) != 3 || w != width || h != height || acc.samples < 0)
+    throw Error("--checkpoint " + path + ": its header '" + dims + "' does not match " + std::to_string(width) + "x" +
+                std::to_string(height));
+  if (acc.samples > spp)
+    throw Error("--checkpoint " + path + " already holds " + std::to_string(acc.samples) + " spp, more than --spp " +
+                std::to_string(spp));
+  const size_t floats = size_t(width) * height * 4;
+  acc.sum.resize(floats);
+  acc.sumSq.resize(floats);
+  in.read(reinterpret_cast<char*>(acc.sum.data()), std::streamsize(floats * sizeof(float)));
+  in.read(reinterpret_cast<char*>(acc.sumSq.data()), std::streamsize(floats * sizeof(float)));
+  if (!in || in.peek() != std::char_traits<char>::eof())
+    throw Error("--checkpoint " + path + ": truncated or too long for " + std::to_string(width) + "x" +
+                std::to_string(height));
+  return acc;
+}
 
 std::string lowerExt(const std::string& path) {
   std::string e = std::filesystem::path(path).extension().string();
@@ -105,10 +157,11 @@ std::string hex16(uint64_t v) {
   return b;
 }
 
-void progress(int done, int total, double elapsed, bool final) {
+// `resumedAt`: samples restored from a checkpoint (not part of `elapsed`, left out of the rate).
+void progress(int done, int total, double elapsed, bool final, int resumedAt) {
   const int W = 30;
   int filled = total > 0 ? done * W / total : W;
-  double left = done > 0 ? elapsed * double(total - done) / double(done) : 0.0;
+  double left = done > resumedAt ? elapsed * double(total - done) / double(done - resumedAt) : 0.0;
   std::fprintf(stderr, "\r[%.*s%.*s] %d/%d spp  %.1f s elapsed, %.1f s left   ", filled,
                "##############################", W - filled, "..............................", done, total, elapsed,
                left);
@@ -127,14 +180,21 @@ void run(const ReferenceArgs& a) {
   // The cache is looked up before the scene is loaded (a hit must be instant): the key names the
   // camera, size and scene as given on the command line; the scene's content hash covers what
   // the defaults (default camera, size) are taken from.
+  if (!a.checkpoint.empty() && !(a.checkpointSeconds > 0.0))
+    throw Error("--checkpoint-seconds must be positive");
+  auto referenceIdentity = [&](bool withSpp) {
+    std::ostringstream k;
+    k << sceneIdentity(a.scene, a.common.media) << "|camera " << a.camera << "|" << a.width << "x" << a.height
+      << "|" << referenceModeName(mode);
+    if (withSpp) k << "|spp " << a.spp;
+    k << "|bounces " << a.maxBounces << "|seed " << a.seed << "|diffuse " << a.diffuseOnly << "|code "
+      << hex16(pathTracerCodeHash());
+    return k.str();
+  };
   std::filesystem::path cacheExr, cacheVar;
   std::string cacheDir = cl::Context::cacheDirectory();
   if (!a.noCache && !cacheDir.empty()) {
-    std::ostringstream k;
-    k << sceneIdentity(a.scene, a.common.media) << "|camera " << a.camera << "|" << a.width << "x" << a.height
-      << "|" << referenceModeName(mode) << "|spp " << a.spp << "|bounces " << a.maxBounces << "|seed " << a.seed
-      << "|diffuse " << a.diffuseOnly << "|code " << hex16(pathTracerCodeHash());
-    std::string key = hex16(fnv1a64(k.str()));
+    std::string key = hex16(fnv1a64(referenceIdentity(true)));
     std::filesystem::path dir = std::filesystem::path(cacheDir) / "references";
     cacheExr = dir / (key + ".exr");
     cacheVar = dir / (key + ".var.exr");
@@ -169,12 +229,20 @@ void run(const ReferenceArgs& a) {
                o.diffuseOnly ? " diffuse-only" : "", a.spp, o.maxBounces, o.seed, scene.triangleCount(),
                pt.bvhStats().buildSeconds, pt.emissiveTriangles(), pt.punctualLights());
 
+  const std::string checkpointIdentity = a.checkpoint.empty() ? "" : referenceIdentity(false);
+  if (!a.checkpoint.empty() && std::filesystem::exists(a.checkpoint)) {
+    pt.restore(readCheckpoint(a.checkpoint, checkpointIdentity, o.width, o.height, a.spp));
+    std::fprintf(stderr, "reference: resuming from %s at %d spp\n", a.checkpoint.c_str(), pt.samplesDone());
+  }
+  auto saveCheckpoint = [&] { writeCheckpoint(a.checkpoint, checkpointIdentity, o.width, o.height, pt.accumulation()); };
+
   gInterrupted.store(false);
   auto previous = std::signal(SIGINT, onSigint);
   auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   int batch = 1;
-  double lastPrint = -1.0;
+  double lastPrint = -1.0, lastCheckpoint = 0.0;
+  const int resumedAt = pt.samplesDone();
   while (pt.samplesDone() < a.spp && !gInterrupted.load()) {
     int n = std::min(batch, a.spp - pt.samplesDone());
     auto tb = std::chrono::steady_clock::now();
@@ -184,13 +252,21 @@ void run(const ReferenceArgs& a) {
     double perSample = dt / n;
     batch = std::clamp(int(0.3 / std::max(perSample, 1e-6)), 1, 256);
     if (elapsed() - lastPrint > 0.25 && pt.samplesDone() < a.spp) {
-      progress(pt.samplesDone(), a.spp, elapsed(), false);
+      progress(pt.samplesDone(), a.spp, elapsed(), false, resumedAt);
       lastPrint = elapsed();
+    }
+    if (!a.checkpoint.empty() && elapsed() - lastCheckpoint > a.checkpointSeconds && pt.samplesDone() < a.spp) {
+      saveCheckpoint();
+      lastCheckpoint = elapsed();
     }
   }
   std::signal(SIGINT, previous);
-  progress(pt.samplesDone(), a.spp, elapsed(), true);
+  progress(pt.samplesDone(), a.spp, elapsed(), true, resumedAt);
   bool interrupted = pt.samplesDone() < a.spp;
+  if (!a.checkpoint.empty()) {
+    if (interrupted || a.keepCheckpoint) saveCheckpoint();
+    else std::filesystem::remove(a.checkpoint);
+  }
 
   Image img = pt.image();
   Image var = pt.variance();
@@ -280,6 +356,11 @@ void registerReferenceCommand(CLI::App& app) {
   cmd->add_option("--out", a->out, "output image (.exr, linear radiance)")->required();
   cmd->add_option("--variance", a->variance, "also write the per-pixel variance of the mean (.exr)");
   cmd->add_flag("--no-cache", a->noCache, "neither reuse nor store a cached reference");
+  cmd->add_option("--checkpoint", a->checkpoint,
+                  "resume from / save progress to this file (deleted when done); same bits as an uninterrupted run");
+  cmd->add_option("--checkpoint-seconds", a->checkpointSeconds, "seconds between checkpoint saves (default 60)")
+      ->check(CLI::Range(0.001, 1e9));
+  cmd->add_flag("--keep-checkpoint", a->keepCheckpoint, "keep the checkpoint when done (to add samples later)");
   addCommonOptions(cmd, a->common);
   cmd->callback([a] { run(*a); });
 

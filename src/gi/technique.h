@@ -33,6 +33,14 @@ struct FrameResources {
   bool upstreamIndirect;     // an earlier technique of the chain has written the indirect buffer
 };
 
+// A number a technique reports about its last frame (`gi bench` writes them under "statistics",
+// `gi sweep` into results.csv), e.g. the share of pixels second-order re-shaded at full resolution.
+struct TechniqueStatistic {
+  std::string name;     // "<technique>.<what>", e.g. "second-order.reshaded_fraction"
+  double value = 0.0;
+  std::string meaning;  // one line for the bench printout
+};
+
 class Technique {
 public:
   virtual ~Technique() = default;
@@ -51,6 +59,8 @@ public:
   // Writes indirect radiance for every camera pixel into `indirect` (float4 per pixel); a
   // modifier reads it first when frame.upstreamIndirect is set.
   virtual void render(const FrameResources& frame, cl::Buffer& indirect) = 0;
+  // What the last frame did, read back from the device: called after timed frames, never inside.
+  virtual std::vector<TechniqueStatistic> statistics(cl::Context& ctx) const { return {}; }
 };
 
 struct TechniqueInfo {

@@ -145,6 +145,23 @@ void PathTracer::download(std::vector<float>& s, std::vector<float>& s2) const {
   s2 = ctx_.download<float>(sumSq_);
 }
 
+PathTracer::Accumulation PathTracer::accumulation() const {
+  Accumulation a;
+  download(a.sum, a.sumSq);
+  a.samples = samples_;
+  return a;
+}
+
+void PathTracer::restore(const Accumulation& a) {
+  const size_t floats = size_t(opt_.width) * opt_.height * 4;
+  if (a.sum.size() != floats || a.sumSq.size() != floats || a.samples < 0)
+    throw Error("path tracer: a checkpoint of " + std::to_string(a.sum.size() / 4) + " pixels does not fit a " +
+                std::to_string(opt_.width) + "x" + std::to_string(opt_.height) + " image");
+  ctx_.write(sum_, a.sum.data(), floats * sizeof(float));
+  ctx_.write(sumSq_, a.sumSq.data(), floats * sizeof(float));
+  samples_ = a.samples;
+}
+
 Image PathTracer::image() const {
   std::vector<float> s, s2;
   download(s, s2);

@@ -47,6 +47,16 @@ public:
   void addSamples(int count);
   int samplesDone() const { return samples_; }
 
+  // The running sums (float4 per pixel: Σ L and Σ L²) and their sample count, for checkpoints.
+  // Restoring them and adding more samples gives the same bits as never stopping: each pixel's
+  // samples are added in sample order whatever the launches were.
+  struct Accumulation {
+    std::vector<float> sum, sumSq;
+    int samples = 0;
+  };
+  Accumulation accumulation() const;
+  void restore(const Accumulation& a);  // throws gi::Error if the sizes do not match
+
   Image image() const;     // mean radiance per pixel, RGB, linear
   Image variance() const;  // variance of that mean per pixel and channel (0 below 2 samples)
 

@@ -154,6 +154,13 @@ Image Renderer::readFloat4(const cl::Buffer& b, int w, int h, int channels) {
   return img;
 }
 
+std::vector<TechniqueStatistic> Renderer::techniqueStatistics() {
+  std::vector<TechniqueStatistic> all;
+  for (auto& t : chain_)
+    for (TechniqueStatistic& s : t->statistics(ctx_)) all.push_back(std::move(s));
+  return all;
+}
+
 Image Renderer::radiance() { return readFloat4(!chain_.empty() ? final_ : direct_, width_, height_, 3); }
 Image Renderer::directRadiance() { return readFloat4(direct_, width_, height_, 3); }
 Image Renderer::indirectRadiance() { return readFloat4(indirect_, width_, height_, 3); }

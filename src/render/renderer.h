@@ -48,6 +48,8 @@ public:
   Image radiance();        // final linear radiance, RGB
   Image directRadiance();  // direct lighting only (incl. emission)
   Image indirectRadiance();  // the technique's output (zero for "direct")
+  // Every technique of the chain's statistics about the last frame (reads the device back).
+  std::vector<TechniqueStatistic> techniqueStatistics();
 
   // Writes the G-buffer planes and every RSM as EXR files into `dir`; returns the paths.
   std::vector<std::string> writeAovs(const std::string& dir);

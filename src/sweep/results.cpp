@@ -68,12 +68,14 @@ OrderedJson flatten(const Configuration& c, const json& result) {
   row["host_peak_rss_bytes"] = b.value("host_peak_rss_bytes", uint64_t(0));
   row["exposure"] = b.value("exposure", 1.0);
   row["image"] = b.value("image", "");
+  if (b.contains("statistics")) row["statistics"] = b["statistics"];
   if (b.contains("quality")) {
     const json& q = b["quality"];
     row["quality"] = OrderedJson::object();
     for (const char* m : {"ssim", "grade", "flip", "relmse", "psnr_db"}) row["quality"][m] = q.contains(m) ? q[m] : json();
     row["heatmap"] = q.value("heatmap", "");
     row["reference"] = q.value("reference", "");
+    if (q.contains("reference_spp")) row["reference_spp"] = q["reference_spp"];
   } else {
     row["quality"] = nullptr;
   }
@@ -133,7 +135,7 @@ void writeResultTables(const std::string& dir) {
   writeText(fs::path(dir) / "results.json", doc.dump(2) + "\n");
 
   // CSV: fixed columns, then the union of parameters, passes and kernels in first-seen order.
-  std::vector<std::string> params, passes, kernels;
+  std::vector<std::string> params, passes, kernels, statistics;
   auto collect = [](std::vector<std::string>& names, const OrderedJson& object) {
     if (!object.is_object()) return;
     for (auto& [n, v] : object.items())
@@ -143,6 +145,7 @@ void writeResultTables(const std::string& dir) {
     collect(params, r["params"]);
     if (r.contains("passes_ms")) collect(passes, r["passes_ms"]);
     if (r.contains("kernels_ms")) collect(kernels, r["kernels_ms"]);
+    if (r.contains("statistics")) collect(statistics, r["statistics"]);
   }
   const std::vector<std::string> fixed = {"id", "status", "message", "scene", "camera", "width", "height", "device",
                                           "technique", "frames", "warmup", "device_name", "driver", "git_revision",
@@ -154,8 +157,9 @@ void writeResultTables(const std::string& dir) {
   for (auto& p : params) header("param:" + p);
   for (auto& p : passes) header("pass:" + p + " ms");
   for (auto& k : kernels) header("kernel:" + k + " ms");
+  for (auto& st : statistics) header("statistic:" + st);
   for (auto& q : quality) header(q);
-  for (const char* f : {"image", "heatmap", "reference"}) header(f);
+  for (const char* f : {"image", "heatmap", "reference", "reference_spp"}) header(f);
   csv += "\n";
   for (auto& r : rows) {
     std::vector<std::string> cells;
@@ -166,8 +170,9 @@ void writeResultTables(const std::string& dir) {
     for (auto& p : params) at(r["params"], p);
     for (auto& p : passes) at(r.contains("passes_ms") ? r["passes_ms"] : OrderedJson(), p);
     for (auto& k : kernels) at(r.contains("kernels_ms") ? r["kernels_ms"] : OrderedJson(), k);
+    for (auto& st : statistics) at(r.contains("statistics") ? r["statistics"] : OrderedJson(), st);
     for (auto& q : quality) at(r.contains("quality") ? r["quality"] : OrderedJson(), q);
-    for (const char* f : {"image", "heatmap", "reference"}) at(r, f);
+    for (const char* f : {"image", "heatmap", "reference", "reference_spp"}) at(r, f);
     for (size_t i = 0; i < cells.size(); ++i) csv += (i ? "," : "") + cells[i];
     csv += "\n";
   }

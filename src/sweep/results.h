@@ -4,10 +4,12 @@
 //                 configuration (id, scene, camera, width, height, device, technique, params),
 //                 status and message, device name/driver, git revision, frame_wall_ms and
 //                 device_total_ms (medians), passes_ms and kernels_ms (medians), passes (median,
-//                 min, max), device_bytes, host_peak_rss_bytes, quality (ssim, grade, flip,
-//                 relmse, psnr_db, or null), image/heatmap/reference paths relative to the folder.
-//   results.csv   the same rows; columns param:<name>, pass:<name> ms and kernel:<name> ms are
-//                 the union over rows.
+//                 min, max), device_bytes, host_peak_rss_bytes, statistics (when the technique
+//                 reports any, Technique::statistics), quality (ssim, grade, flip,
+//                 relmse, psnr_db, or null), image/heatmap/reference paths relative to the folder,
+//                 reference_spp.
+//   results.csv   the same rows; columns param:<name>, pass:<name> ms, kernel:<name> ms and
+//                 statistic:<name> are the union over rows.
 #pragma once
 #include <string>
 

@@ -187,13 +187,14 @@ public:
       return "";
     }
     fs::create_directories(exr.parent_path());
-    std::fprintf(stderr, "sweep: path-tracing the reference %s (%d spp)\n", key.c_str(), spec_.reference.spp);
+    const int spp = spec_.reference.sppFor(c);
+    std::fprintf(stderr, "sweep: path-tracing the reference %s (%d spp)\n", key.c_str(), spp);
     std::vector<std::string> args{"reference"};
     if (!c.scene.empty()) args.push_back(c.scene);
     if (!c.camera.empty()) args.insert(args.end(), {"--camera", c.camera});
     args.insert(args.end(), {"--width", std::to_string(c.width), "--height", std::to_string(c.height), "--spp",
-                             std::to_string(spec_.reference.spp), "--max-bounces", std::to_string(spec_.reference.maxBounces),
-                             "--out", exr.string()});
+                             std::to_string(spp), "--max-bounces", std::to_string(spec_.reference.maxBounces),
+                             "--out", exr.string(), "--checkpoint", (dir_ / "references" / (key + ".checkpoint")).string()});
     if (!spec_.reference.device.empty()) args.insert(args.end(), {"--device", spec_.reference.device});
     if (!spec_.media.empty()) args.insert(args.end(), {"--media", spec_.media});
     ChildResult r = runChild(args, dir_ / "references" / (key + ".log"), 0);
@@ -240,6 +241,7 @@ public:
       if (bench.contains("quality")) {
         bench["quality"]["heatmap"] = rel + "heatmap.png";
         bench["quality"]["reference"] = fs::relative(ref, dir_).string();
+        bench["quality"]["reference_spp"] = spec_.reference.sppFor(c);
       }
       result["bench"] = bench;
     }

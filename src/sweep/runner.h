@@ -2,7 +2,8 @@
 //   spec.json                 the spec as given (a resumed or merged sweep must have the same)
 //   runs/<id>/result.json     one finished configuration: status ok|failed, message, `gi bench` JSON
 //   runs/<id>/{bench.json, image.png, heatmap.png, log.txt}
-//   references/<key>.exr      path-traced references (`gi reference`), shared by configurations
+//   references/<key>.exr      path-traced references (`gi reference`), shared by configurations;
+//   references/<key>.checkpoint  a reference's progress while it renders (resumed after a stop)
 //   results.json, results.csv one row per finished configuration; report.html (sweep/report.h)
 // Each configuration runs as a child process of the same `gi` binary (`gi bench ...`), so a crash,
 // an error or a time-out is recorded as that configuration's failure and the sweep goes on.

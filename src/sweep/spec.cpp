@@ -215,12 +215,32 @@ Spec parseSpec(const json& j) {
   }
   if (j.contains("reference") && !j["reference"].is_null() && j["reference"] != false) {
     const json& r = j["reference"];
-    checkKeys(r, "'reference'", {"spp", "max_bounces", "device"});
+    checkKeys(r, "'reference'", {"spp", "max_bounces", "device", "spp_overrides"});
     spec.reference.enabled = true;
     spec.reference.spp = positiveInt(r, "spp", 256, 1 << 24);
     spec.reference.maxBounces = positiveInt(r, "max_bounces", 8, 1000);
     if (r.contains("device")) spec.reference.device = stringOf(r["device"], "reference 'device'");
     if (spec.reference.spp < 1) throw Error("sweep spec: reference 'spp' must be at least 1");
+    if (r.contains("spp_overrides")) {
+      if (!r["spp_overrides"].is_array()) throw Error("sweep spec: reference 'spp_overrides' must be a list");
+      for (const json& o : r["spp_overrides"]) {
+        if (!o.is_object()) throw Error("sweep spec: each reference spp override must be an object");
+        checkKeys(o, "a reference spp override", {"scene", "resolution", "spp"});
+        ReferenceSpec::SppOverride ov;
+        if (o.contains("scene")) {
+          ov.sceneLabel = stringOf(o["scene"], "spp override 'scene'");
+          bool known = false;
+          for (auto& sc : scenes) known = known || parseScene(sc).label == ov.sceneLabel;
+          if (!known) throw Error("sweep spec: spp override scene '" + ov.sceneLabel + "' is none of the spec's scene labels");
+        }
+        if (o.contains("resolution")) std::tie(ov.width, ov.height) = parseResolution(o["resolution"]);
+        if (ov.sceneLabel.empty() && ov.width == 0)
+          throw Error("sweep spec: a reference spp override needs a 'scene' or a 'resolution'");
+        ov.spp = positiveInt(o, "spp", 0, 1 << 24);
+        if (ov.spp < 1) throw Error("sweep spec: a reference spp override needs 'spp' >= 1");
+        spec.reference.sppOverrides.push_back(ov);
+      }
+    }
   }
 
   // Parameters every configuration gets (a technique entry's own set, grid and zip override them).
@@ -315,9 +335,16 @@ std::vector<Configuration> selectShard(const std::vector<Configuration>& all, Sh
   return out;
 }
 
+int ReferenceSpec::sppFor(const Configuration& c) const {
+  for (const SppOverride& o : sppOverrides)
+    if ((o.sceneLabel.empty() || o.sceneLabel == c.sceneLabel) && (o.width == 0 || (o.width == c.width && o.height == c.height)))
+      return o.spp;
+  return spp;
+}
+
 std::string referenceKey(const Configuration& c, const ReferenceSpec& r) {
   json key = {{"scene", c.scene},   {"camera", c.camera}, {"width", c.width},
-              {"height", c.height}, {"spp", r.spp},       {"max_bounces", r.maxBounces}};
+              {"height", c.height}, {"spp", r.sppFor(c)}, {"max_bounces", r.maxBounces}};
   return c.sceneLabel + "_" + std::to_string(c.width) + "x" + std::to_string(c.height) + "_" + hex16(fnv1a64(key.dump()));
 }
 

@@ -37,6 +37,16 @@ struct ReferenceSpec {
   bool enabled = false;
   int spp = 256, maxBounces = 8;
   std::string device;  // "" = the default device
+  // "spp_overrides": [{"scene": LABEL, "resolution": "WxH", "spp": N}, ...] — a different sample
+  // count for the references of one scene and/or resolution (e.g. a 1280×720 Sponza that would
+  // take hours at the spec's spp). The first override whose given fields all match wins.
+  struct SppOverride {
+    std::string sceneLabel;  // "" = any scene
+    int width = 0, height = 0;  // 0 = any resolution
+    int spp = 0;
+  };
+  std::vector<SppOverride> sppOverrides;
+  int sppFor(const Configuration& c) const;
 };
 
 struct Spec {

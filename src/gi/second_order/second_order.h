@@ -26,6 +26,7 @@ public:
   bool needsRsm() const override { return true; }
   void setup(const FrameResources& frame) override;
   void render(const FrameResources& frame, cl::Buffer& indirect) override;
+  std::vector<TechniqueStatistic> statistics(cl::Context& ctx) const override;
 
   // What the last frame computed, for the tests: the lights (N per light, then M negative ones,
   // kernels/gi/vpl layout), counters (re-shaded pixels, surface pixels, negative lights found),
@@ -55,6 +56,7 @@ private:
   cl::Buffer counters_, flags_, rowCountsBuf_, rowOffsets_, list_, planes_, candidates_, picked_, lowIrradiance_;
   int width_ = 0, height_ = 0, lowW_ = 0, lowH_ = 0, candidatesFor_ = -1, candidateCount_ = 0;
   int frame_ = 0;  // seeds the random placement
+  int negativeAsked_ = 0;  // M of the last frame (counters[2] is only written when M > 0)
 };
 
 // Halton points on the unit sphere (the paper's §3.1: φ = 2π·Φ₂(i), sin δ = 2·Φ₃(i) − 1,

@@ -69,6 +69,7 @@ void SecondOrderTechnique::render(const FrameResources& f, cl::Buffer& indirect)
   visibility_.update(f);
   const bool rays = visibility_.enabled();
   if (rays) M = 0;
+  negativeAsked_ = M;
   const std::string placement = p.getChoice("second-order.placement");
   const float dmin = p.getFloat("second-order.d_min");
   const bool multires = p.getBool("second-order.multires");
@@ -178,6 +179,16 @@ void SecondOrderTechnique::render(const FrameResources& f, cl::Buffer& indirect)
   size_t items = size_t(capacity) / size_t(vw), local = vw > 1 ? 16 : 64;
   ctx.launch(refine, cl::NDRange::d1(cl::roundUp(items, local), local),
              rays ? "second-order: full-resolution shade + rays" : "second-order: full-resolution shade");
+}
+
+std::vector<TechniqueStatistic> SecondOrderTechnique::statistics(cl::Context& ctx) const {
+  if (!counters_.get()) return {};
+  std::vector<int> c = ctx.download<int>(counters_);
+  const double surface = double(c[1]);
+  return {{"second-order.reshaded_fraction", surface > 0 ? c[0] / surface : 0.0,
+           "share of the surface pixels shaded at full resolution (1 without multi-resolution)"},
+          {"second-order.reshaded_pixels", double(c[0]), "pixels shaded at full resolution"},
+          {"second-order.negative_lights", negativeAsked_ > 0 ? double(c[2]) : 0.0, "negative lights placed (back-facing surface pixels found)"}};
 }
 
 void SecondOrderTechnique::buildVisibilityKernels(cl::Context& ctx) {
