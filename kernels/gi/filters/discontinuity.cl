@@ -166,6 +166,11 @@ kernel void discontinuity_filter(int width, int height, global const float* irra
 #if GI_SAME_INSTANCE
     floatV id = vloadV(0, own[7] + GI_FILTER_APRON);
 #endif
+    size_t i = (size_t)y * width + x0;
+    bool whole = x0 + GI_VW <= width;
+    // The albedo is loaded before the window loop so that its cache misses overlap the arithmetic.
+    floatV ar = (floatV)(0.0f), ag = (floatV)(0.0f), ab = (floatV)(0.0f), unused;
+    if (whole) GI_AOS4_LOAD(albedo + 4 * i, ar, ag, ab, unused)
     floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), ws = (floatV)(0.0f);
     floatV tz = tauZ * z;
 #pragma unroll
@@ -194,10 +199,8 @@ kernel void discontinuity_filter(int width, int height, global const float* irra
            eg = select(vloadV(0, own[1] + GI_FILTER_APRON), sg / wdiv, accepted),
            eb = select(vloadV(0, own[2] + GI_FILTER_APRON), sb / wdiv, accepted);
     intV surface = !isnan(z);
-    size_t i = (size_t)y * width + x0;
-    if (x0 + GI_VW <= width) {
-      floatV zero = (floatV)(0.0f), ar, ag, ab, unused;
-      GI_AOS4_LOAD(albedo + 4 * i, ar, ag, ab, unused)
+    if (whole) {
+      floatV zero = (floatV)(0.0f);
       floatV lr = select(zero, ar * (er * GI_INV_PI), surface), lg = select(zero, ag * (eg * GI_INV_PI), surface),
              lb = select(zero, ab * (eb * GI_INV_PI), surface);
       GI_AOS4_STORE(out + 4 * i, lr, lg, lb, zero)
