@@ -6,6 +6,16 @@
 #include "common/shadow.h"
 #include "common/vector_width.h"
 
+// The spot cone's factor on the intensity for lanes whose direction from the light makes cosine
+// `c` with its axis (1 for point and directional lights); light_intensity_towards() lane-wise.
+inline floatV light_spot_factorV(global const GiLight* l, floatV c) {
+  if (l->type != GI_LIGHT_SPOT) return (floatV)(1.0f);
+  if (l->falloff == GI_SPOT_FALLOFF_COSINE) return fmax(c, 0.0f);
+  float scale = 1.0f / fmax(1e-3f, l->cos_inner - l->cos_outer);
+  floatV t = clamp((c - l->cos_outer) * scale, 0.0f, 1.0f);
+  return t * t;
+}
+
 // light_incident() lane-wise: the irradiance on a surface facing the light at x and the unit
 // direction towards the light (*wi).
 inline float3V light_incidentV(global const GiLight* l, float3V x, float3V* wi) {
@@ -18,17 +28,7 @@ inline float3V light_incidentV(global const GiLight* l, float3V x, float3V* wi) 
   floatV d2 = fmax(dotV(d, d), 1e-12f);
   floatV inv = rsqrt(d2);
   *wi = f3v(d.x * inv, d.y * inv, d.z * inv);
-  floatV s = (floatV)(1.0f);
-  if (l->type == GI_LIGHT_SPOT) {
-    floatV c = -(wi->x * l->direction[0] + wi->y * l->direction[1] + wi->z * l->direction[2]);
-    if (l->falloff == GI_SPOT_FALLOFF_COSINE) {
-      s = fmax(c, 0.0f);
-    } else {
-      float scale = 1.0f / fmax(1e-3f, l->cos_inner - l->cos_outer);
-      floatV t = clamp((c - l->cos_outer) * scale, 0.0f, 1.0f);
-      s = t * t;
-    }
-  }
+  floatV s = light_spot_factorV(l, -(wi->x * l->direction[0] + wi->y * l->direction[1] + wi->z * l->direction[2]));
   return f3v(l->intensity[0] * s / d2, l->intensity[1] * s / d2, l->intensity[2] * s / d2);
 }
 

@@ -7,6 +7,7 @@
 #include "common/material.h"
 #include "raster/view.h"
 #include "common/vector_width.h"
+#include "common/lights_lanes.h"
 
 // Both kernels handle GI_VW adjacent pixels of a row per work-item (16 lanes on CPU devices, 1 on
 // GPUs). Per pixel: ray through the pixel centre (view_pixel_ray), ray-plane barycentrics with the
@@ -393,17 +394,7 @@ kernel void rsm_resolve(GiView view, global const GiLight* lights, int lightInde
     floatV c = w.x * ax + w.y * ay + w.z * az;
     floatV omega = view.texel_world_size * view.texel_world_size * c * c * c;
     intV f = dotV(sv.geoNormal, negV(w)) > 0.0f;
-    floatV s = (floatV)(1.0f);  // light_intensity_towards()
-    if (l->type == GI_LIGHT_SPOT) {
-      floatV cs = w.x * l->direction[0] + w.y * l->direction[1] + w.z * l->direction[2];
-      if (l->falloff == GI_SPOT_FALLOFF_COSINE) {
-        s = fmax(cs, 0.0f);
-      } else {
-        float scale = 1.0f / fmax(1e-3f, l->cos_inner - l->cos_outer);
-        floatV ta = clamp((cs - l->cos_outer) * scale, 0.0f, 1.0f);
-        s = ta * ta;
-      }
-    }
+    floatV s = light_spot_factorV(l, w.x * l->direction[0] + w.y * l->direction[1] + w.z * l->direction[2]);
     float3V Iw = l->type == GI_LIGHT_SPOT ? scaleV(I, s) : I;
     flux = selV(f3v(zero, zero, zero), scaleV(f3v(sv.diffuse.x * Iw.x, sv.diffuse.y * Iw.y, sv.diffuse.z * Iw.z), omega), f);
   }
