@@ -66,7 +66,7 @@ def main():
             print(f"| {c['technique']} | {params} | {fmt(b['device_total_ms']['median_ms'])} | {fmt(own)} | "
                   f"{fmt(b['frame_wall_ms']['median_ms'])} | {fmt(b.get('device_bytes', 0) / 1e6)} | "
                   f"{fmt(q.get('ssim'), 4)} | {fmt(q.get('flip'), 4)} | {fmt(q.get('relmse'), 4)} |"
-                  + "".join(f" {b.get('statistics', {}).get(k, float('nan')):.4g} |" for k in stats))
+                  + "".join(f" {b['statistics'][k]:.4g} |" if k in b.get("statistics", {}) else " — |" for k in stats))
     print(f"\n{len(rows)} configuration(s) finished.")
 
 
