@@ -16,7 +16,9 @@
 //                         summing both would count a surface seen by both twice.
 //   lpv_face_geometry     blocking potential per cell face (mean of its 4 corner nodes), once per
 //                         frame: the geometry volume does not change over the steps.
-//   lpv_propagate         one gather step: each cell collects from its 6 neighbours, 5 faces each.
+//   lpv_propagate_blocked, lpv_propagate_open
+//                         one gather step: each cell collects from its 6 neighbours, 5 faces each
+//                         (with or without the geometry volume's blocking).
 //   lpv_lookup_grid       accumulated grid -> the lookup grid (irradiance coefficients, float4 per
 //                         cell and channel; copied into a 3D image on devices that filter images
 //                         in hardware, lpv.lookup_storage).
@@ -31,13 +33,13 @@
 // partial sums, so the result stays bit-identical run to run.
 //
 // Layouts (N = LPV_N, cells (z·N + y)·N + x, nodes the same with N + 1):
-//   grid     float planes [cascade][channel r,g,b][coefficient][cell]: SH coefficients of intensity
-//            (sh.h order), after LPV_PAD floats of padding, each plane followed by LPV_SKEW floats
-//            (zero), so the propagation's row loads one cell left or right of a row stay inside
-//            the buffer;
+//   grid     float row blocks [cascade][z][y][channel r,g,b][coefficient][x] (LPV_AT): SH
+//            coefficients of intensity (sh.h order), after LPV_PAD floats of padding, each z slice
+//            followed by LPV_SKEW floats (zero), so the propagation's row loads one cell left or
+//            right of a row stay inside the buffer;
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
 //   geometry float planes [cascade][coefficient][node]; geometryAcc long [cascade][source rsm, camera][node][4]
-//   faceGeometry float planes [cascade][axis][coefficient][cell] (padded like grid)
+//   faceGeometry float row blocks [cascade][z][y][axis][coefficient][x] (laid out like grid)
 //   lookupGrid float4 [cascade][channel][cell] (lpv_lookup_grid)
 //   cascades float4 [cascade]: (origin xyz of cell (0,0,0)'s corner, cell edge s), metres
 // The propagation works on LPV_LANES cells of a row per work-item, the injection and surfel
@@ -50,10 +52,17 @@
 #include "common/vector_width.h"
 
 #define LPV_CELLS (LPV_N * LPV_N * LPV_N)
-// Planes lie LPV_STRIDE = LPV_CELLS + LPV_SKEW floats apart: with a power-of-two N³ alone the 40-odd
-// planes a propagation work-item reads would fall into the same cache sets and evict each other.
-#define LPV_STRIDE (LPV_CELLS + LPV_SKEW)
-#define LPV_PLANE(k, ch, coef) ((size_t)(((k) * 3 + (ch)) * 4 + (coef)) * LPV_STRIDE)
+// Row blocks: each row of cells (cascade k, z, y) holds its 12 planes p = channel·4 + coefficient
+// of LPV_N floats one after the other, so that a propagation work-item reads 5 nearby rows of the
+// source grid (its own, y ± 1, z ± 1) and one row block of each other grid: a few sequential
+// streams. With whole planes of N³ floats per coefficient a work-item read ~60 streams far apart,
+// more than the hardware prefetchers follow: a 32³ step then waited on memory (docs/PERFORMANCE.md).
+// Slices lie LPV_SLICE = 12·N² + LPV_SKEW floats apart (12·N² alone is a multiple of 4096 bytes at
+// N = 32: the z ± 1 rows would share cache sets).
+#define LPV_ROW (12 * LPV_N)
+#define LPV_SLICE (LPV_ROW * LPV_N + LPV_SKEW)
+// Float offset (after the LPV_PAD floats of padding) of plane p of cell (x, y, z) in cascade k.
+#define LPV_AT(k, p, x, y, z) ((size_t)((k) * LPV_N + (z)) * LPV_SLICE + (size_t)(y) * LPV_ROW + (p) * LPV_N + (x))
 #define LPV_M (LPV_N + 1)
 #define LPV_NODES (LPV_M * LPV_M * LPV_M)
 
@@ -259,12 +268,11 @@ kernel void lpv_resolve_injection(global const long* gridAcc, float invFixedScal
                                   global float* accumulated) {
   size_t cell = get_global_id(0), ch = get_global_id(1), k = get_global_id(2);
   float4 v = convert_float4(vload4((k * 3 + ch) * LPV_CELLS + cell, gridAcc)) * invFixedScale;
-  grid += LPV_PAD;
-  accumulated += LPV_PAD;
+  size_t at = LPV_PAD + LPV_AT(k, ch * 4, cell % LPV_N, (cell / LPV_N) % LPV_N, cell / (LPV_N * LPV_N));
   for (int coef = 0; coef < 4; ++coef) {
     float c = coef == 0 ? v.x : coef == 1 ? v.y : coef == 2 ? v.z : v.w;
-    grid[LPV_PLANE(k, ch, coef) + cell] = c;
-    accumulated[LPV_PLANE(k, ch, coef) + cell] = c;
+    grid[at + coef * LPV_N] = c;
+    accumulated[at + coef * LPV_N] = c;
   }
 }
 
@@ -324,7 +332,7 @@ typedef int intL;
 #define LPV_SIDE_SCALE 0.4472135955f  // 1/√5: ω = normalize(2·d ± e_b)
 // Blocking potential at each cell's 3 lower faces, once per frame (the geometry volume does not
 // change over the propagation steps): the mean of the 4 corner nodes of the face between cell
-// c − e_a and c. Planes [cascade][axis a][coefficient][cell] after LPV_PAD floats, like the grids.
+// c − e_a and c. Plane p = a·4 + coefficient of the grids' row-block layout (LPV_AT).
 // One work-item per (cell, axis, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
 kernel void lpv_face_geometry(global const float* geometry, global float* faceGeometry) {
   size_t cell = get_global_id(0), a = get_global_id(1), k = get_global_id(2);
@@ -333,104 +341,131 @@ kernel void lpv_face_geometry(global const float* geometry, global float* faceGe
   size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;  // the face's two in-plane axes
   for (int q = 0; q < 4; ++q) {
     global const float* plane = geometry + (k * 4 + q) * LPV_NODES + n0;
-    faceGeometry[LPV_PAD + LPV_PLANE(k, a, q) + cell] = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
+    faceGeometry[LPV_PAD + LPV_AT(k, a * 4 + q, x, y, z)] = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
   }
 }
 
 // T_f of the 5 faces for light along direction dir from the blocking potential g (4 coefficients)
-// of the face the two cells share: ΔΩ_f/π · (1 − clamp(GV · Y(−ω_f), 0, 1)).
-inline void lpv_transmittance(int dir, const floatL* g, floatL* t) {
+// of the face the two cells share: ΔΩ_f/π · (1 − clamp(GV · Y(−ω_f), 0, 1)), evaluated as
+// clamp(ΔΩ_f/π − ΔΩ_f/π · GV · Y(−ω_f), 0, ΔΩ_f/π) with the constants folded into fused
+// multiply-adds (2 per face and direction fewer than the plain form). The upper bounds mainMax and
+// sideMax are ΔΩ_f/π, or 0 in the lanes whose neighbour lies outside the grid (x borders): a zero
+// factor there replaces a select on each of the neighbour's 12 coefficients. A zero potential
+// gives exactly ΔΩ_f/π.
+inline void lpv_transmittance(int dir, const floatL* g, floatL mainMax, floatL sideMax, floatL* t) {
   int a = dir / 2;
   float s = dir % 2 ? -1.0f : 1.0f;
   int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
-  // GV · Y(−ω) for ω = d (main) and normalize(2d ± e_b) (sides).
-  floatL main = GI_SH_Y0 * g[0] - (GI_SH_Y1 * s) * g[LPV_COEF(a)];
-  floatL side = GI_SH_Y0 * g[0] - (GI_SH_Y1 * LPV_SIDE_SCALE * 2.0f * s) * g[LPV_COEF(a)];
-  floatL sideB1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b1)], sideB2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b2)];
   const float mainWeight = LPV_MAIN_FACE_SOLID_ANGLE * GI_INV_PI, sideWeight = LPV_SIDE_FACE_SOLID_ANGLE * GI_INV_PI;
-  t[0] = mainWeight * (1.0f - clamp(main, 0.0f, 1.0f));
-  t[1] = sideWeight * (1.0f - clamp(side - sideB1, 0.0f, 1.0f));
-  t[2] = sideWeight * (1.0f - clamp(side + sideB1, 0.0f, 1.0f));
-  t[3] = sideWeight * (1.0f - clamp(side - sideB2, 0.0f, 1.0f));
-  t[4] = sideWeight * (1.0f - clamp(side + sideB2, 0.0f, 1.0f));
+  // GV · Y(−ω) = Y0·g0 − Y1·(ω · g_lin) for ω = d (main) and normalize(2d ± e_b) (sides).
+  floatL openMain = fma(g[LPV_COEF(a)], (floatL)(mainWeight * GI_SH_Y1 * s),
+                        fma(g[0], (floatL)(-mainWeight * GI_SH_Y0), (floatL)(mainWeight)));
+  floatL openSide = fma(g[LPV_COEF(a)], (floatL)(sideWeight * GI_SH_Y1 * LPV_SIDE_SCALE * 2.0f * s),
+                        fma(g[0], (floatL)(-sideWeight * GI_SH_Y0), (floatL)(sideWeight)));
+  floatL sideB1 = (sideWeight * GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b1)];
+  floatL sideB2 = (sideWeight * GI_SH_Y1 * LPV_SIDE_SCALE) * g[LPV_COEF(b2)];
+  t[0] = fmin(fmax(openMain, 0.0f), mainMax);
+  t[1] = fmin(fmax(openSide + sideB1, 0.0f), sideMax);
+  t[2] = fmin(fmax(openSide - sideB1, 0.0f), sideMax);
+  t[3] = fmin(fmax(openSide + sideB2, 0.0f), sideMax);
+  t[4] = fmin(fmax(openSide - sideB2, 0.0f), sideMax);
 }
 
 // Adds the light channel `in` (4 coefficient planes) of the neighbour in direction `dir` sends
 // through the destination's 5 faces: face fluxes T_f · max(0, I(ω_f)) into o[0] (sum of the
 // fluxes) and o[1..3] (signed along the re-emission axis), scaled by the lobe constants at the end.
+// Fused multiply-adds; the direction's 5 fluxes are summed first and added to o[0] once, so that
+// o[0] is not one chain of 30 dependent adds per channel.
 inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
   int a = dir / 2;
   float s = dir % 2 ? -1.0f : 1.0f;
   int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
   floatL dc = GI_SH_Y0 * in[0];
-  floatL fMain = fmax(dc + (GI_SH_Y1 * s) * in[LPV_COEF(a)], 0.0f) * t[0];
-  floatL side = dc + (GI_SH_Y1 * LPV_SIDE_SCALE * 2.0f * s) * in[LPV_COEF(a)];
+  floatL fMain = fmax(fma(in[LPV_COEF(a)], (floatL)(GI_SH_Y1 * s), dc), 0.0f);
+  floatL side = fma(in[LPV_COEF(a)], (floatL)(GI_SH_Y1 * LPV_SIDE_SCALE * 2.0f * s), dc);
   floatL r1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b1)], r2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b2)];
-  floatL f1p = fmax(side + r1, 0.0f) * t[1], f1m = fmax(side - r1, 0.0f) * t[2];
-  floatL f2p = fmax(side + r2, 0.0f) * t[3], f2m = fmax(side - r2, 0.0f) * t[4];
-  o[0] += fMain + f1p + f1m + f2p + f2m;
-  o[LPV_COEF(a)] += s > 0.0f ? fMain : -fMain;
-  o[LPV_COEF(b1)] += f1p - f1m;
-  o[LPV_COEF(b2)] += f2p - f2m;
+  floatL f1p = fmax(side + r1, 0.0f), f1m = fmax(side - r1, 0.0f);
+  floatL f2p = fmax(side + r2, 0.0f), f2m = fmax(side - r2, 0.0f);
+  floatL sum = fma(f2m, t[4], fma(f2p, t[3], fma(f1m, t[2], fma(f1p, t[1], fMain * t[0]))));
+  o[0] += sum;
+  o[LPV_COEF(a)] = fma(s > 0.0f ? fMain : -fMain, t[0], o[LPV_COEF(a)]);
+  o[LPV_COEF(b1)] = fma(-f1m, t[2], fma(f1p, t[1], o[LPV_COEF(b1)]));
+  o[LPV_COEF(b2)] = fma(-f2m, t[4], fma(f2p, t[3], o[LPV_COEF(b2)]));
 }
 
 // One gather step of cascade k. Work-item = LPV_LANES destination cells of a row (global
-// (N / LPV_LANES, N, N)). The 30 face transmittances T_f first (from the shared faces' blocking potential,
-// kept in private memory), then channel after channel, so that only 4 accumulators and one
-// neighbour's 4 coefficients are live (16 float16 would not fit AVX2's registers). `blocking` = 0
-// uses the unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them —
-// or occlusion off).
-kernel void lpv_propagate(global const float* src, global float* dst, global float* accumulated,
-                          global const float* faceGeometry, int k, int blocking) {
+// (N / LPV_LANES, N, N)). The 30 face transmittances T_f first (from the shared faces' blocking
+// potential, kept in private memory), then channel after channel, so that only 4 accumulators and
+// one neighbour's 4 coefficients are live (16 float16 would not fit AVX2's registers). Two kernels
+// from one body: `lpv_propagate_blocked` reads the face potentials, `lpv_propagate_open` uses the
+// unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them — or
+// occlusion off) without loading or computing any factor; the blocking is a compile-time constant
+// in each, so neither carries the other's work.
+inline void lpv_propagate_step(global const float* src, global float* dst, global float* accumulated,
+                               global const float* faceGeometry, int k, const bool blocking) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2);
-  int cell = (z * LPV_N + y) * LPV_N + x0;
+  size_t row = LPV_PAD + LPV_AT(k, 0, x0, y, z);  // plane 0 of the work-item's first cell
   intL x = x0 + LPV_LANE_IDS;
-  intL insideLeft = x >= 1, insideRight = x < LPV_N - 1;  // neighbours at x − 1 (dir 0), x + 1 (dir 1)
+  const float mainWeight = LPV_MAIN_FACE_SOLID_ANGLE * GI_INV_PI, sideWeight = LPV_SIDE_FACE_SOLID_ANGLE * GI_INV_PI;
+  // Neighbours at x − 1 (dir 0) and x + 1 (dir 1) outside the grid: zero factors in those lanes.
+  intL insideLeft = x >= 1, insideRight = x < LPV_N - 1;
+  const floatL mainMax[2] = {select((floatL)(0.0f), (floatL)(mainWeight), insideLeft),
+                             select((floatL)(0.0f), (floatL)(mainWeight), insideRight)};
+  const floatL sideMax[2] = {select((floatL)(0.0f), (floatL)(sideWeight), insideLeft),
+                             select((floatL)(0.0f), (floatL)(sideWeight), insideRight)};
   bool inside[6] = {true, true, y >= 1, y < LPV_N - 1, z >= 1, z < LPV_N - 1};
-  const int stride[3] = {1, LPV_N, LPV_N * LPV_N};
+  const int stride[3] = {1, LPV_ROW, LPV_SLICE};
   floatL t[6][5];
 #pragma unroll
   for (int dir = 0; dir < 6; ++dir) {
-    // The shared face: the lower face along a of the cell itself (light along +a) or of the cell
-    // above. Without blocking, and for rows outside the grid, the potential is zero (T_f = ΔΩ_f/π
-    // exactly) and the cell's own face is read in place of one that may lie past the buffer. No
-    // branch: with an if/else choosing between computed and constant factors here the step cost
-    // about 1.5–2× more (docs/PERFORMANCE.md).
-    bool blocked = blocking && inside[dir];
-    global const float* face =
-        faceGeometry + LPV_PAD + LPV_PLANE(k, dir / 2, 0) + cell + (blocked && dir % 2 ? stride[dir / 2] : 0);
-    float use = blocked ? 1.0f : 0.0f;
-    floatL g[4];
+    floatL maxMain = dir < 2 ? mainMax[dir] : (floatL)(mainWeight), maxSide = dir < 2 ? sideMax[dir] : (floatL)(sideWeight);
+    if (blocking) {
+      // The shared face: the lower face along a of the cell itself (light along +a) or of the
+      // cell above. For a y or z neighbour row outside the grid (its factors are not used) the
+      // cell's own face is read in place of one that may lie past the buffer.
+      global const float* face =
+          faceGeometry + row + (dir / 2) * 4 * LPV_N + (inside[dir] && dir % 2 ? stride[dir / 2] : 0);
+      floatL g[4];
 #pragma unroll
-    for (int q = 0; q < 4; ++q) g[q] = use * vloadL(0, face + (size_t)q * LPV_STRIDE);
-    lpv_transmittance(dir, g, t[dir]);
+      for (int q = 0; q < 4; ++q) g[q] = vloadL(0, face + q * LPV_N);
+      lpv_transmittance(dir, g, maxMain, maxSide, t[dir]);
+    } else {
+      t[dir][0] = maxMain;
+      t[dir][1] = t[dir][2] = t[dir][3] = t[dir][4] = maxSide;
+    }
   }
 #pragma unroll
   for (int ch = 0; ch < 3; ++ch) {
-    size_t planes = LPV_PAD + LPV_PLANE(k, ch, 0);
+    size_t planes = row + ch * 4 * LPV_N;
     floatL o[4] = {(floatL)(0.0f), (floatL)(0.0f), (floatL)(0.0f), (floatL)(0.0f)};
 #pragma unroll
     for (int dir = 0; dir < 6; ++dir) {
       if (!inside[dir]) continue;  // whole row outside (y, z neighbours)
-      int nb = cell - (dir % 2 ? -1 : 1) * stride[dir / 2];  // x neighbours may be −1 or LPV_CELLS: padding, skew
+      // x neighbours past the row are the neighbouring plane's cell or padding: factor 0 there.
+      int nb = -(dir % 2 ? -1 : 1) * stride[dir / 2];
       floatL in[4];
 #pragma unroll
-      for (int q = 0; q < 4; ++q) {
-        in[q] = vloadL(0, src + planes + (size_t)q * LPV_STRIDE + nb);
-        if (dir == 0) in[q] = select((floatL)(0.0f), in[q], insideLeft);
-        if (dir == 1) in[q] = select((floatL)(0.0f), in[q], insideRight);
-      }
+      for (int q = 0; q < 4; ++q) in[q] = vloadL(0, src + planes + q * LPV_N + nb);
       lpv_faces(dir, in, t[dir], o);
     }
     const float lobe[4] = {GI_SH_LOBE0, GI_SH_LOBE1, GI_SH_LOBE1, GI_SH_LOBE1};
 #pragma unroll
     for (int q = 0; q < 4; ++q) {
-      size_t at = planes + (size_t)q * LPV_STRIDE + cell;
+      size_t at = planes + q * LPV_N;
       floatL out = lobe[q] * o[q];
       vstoreL(out, 0, dst + at);
       vstoreL(vloadL(0, accumulated + at) + out, 0, accumulated + at);
     }
   }
+}
+
+kernel void lpv_propagate_blocked(global const float* src, global float* dst, global float* accumulated,
+                                  global const float* faceGeometry, int k) {
+  lpv_propagate_step(src, dst, accumulated, faceGeometry, k, true);
+}
+
+kernel void lpv_propagate_open(global const float* src, global float* dst, global float* accumulated, int k) {
+  lpv_propagate_step(src, dst, accumulated, 0, k, false);
 }
 
 // ---- lookup ----------------------------------------------------------------------------------
@@ -443,11 +478,12 @@ kernel void lpv_propagate(global const float* src, global float* dst, global flo
 // One work-item per (cell, channel, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
 kernel void lpv_lookup_grid(global const float* accumulated, constant float4* cascades, global float4* lookupGrid) {
   size_t cell = get_global_id(0), ch = get_global_id(1), k = get_global_id(2);
-  global const float* c = accumulated + LPV_PAD + LPV_PLANE(k, ch, 0) + cell;
+  global const float* c =
+      accumulated + LPV_PAD + LPV_AT(k, ch * 4, cell % LPV_N, (cell / LPV_N) % LPV_N, cell / (LPV_N * LPV_N));
   float s = cascades[k].w;
   float4 conv = (float4)(GI_SH_COSCONV0 * GI_SH_Y0, GI_SH_COSCONV1 * GI_SH_Y1, GI_SH_COSCONV1 * GI_SH_Y1,
                          GI_SH_COSCONV1 * GI_SH_Y1) / (s * s);
-  lookupGrid[(k * 3 + ch) * LPV_CELLS + cell] = conv * (float4)(c[0], c[LPV_STRIDE], c[2 * LPV_STRIDE], c[3 * LPV_STRIDE]);
+  lookupGrid[(k * 3 + ch) * LPV_CELLS + cell] = conv * (float4)(c[0], c[LPV_N], c[2 * LPV_N], c[3 * LPV_N]);
 }
 
 // The lookup grid is a 3D image (LPV_N × LPV_N × LPV_N·3·cascades, the slabs stacked along z) on

@@ -120,14 +120,15 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   resolveInjection_ = program_.kernel("lpv_resolve_injection");
   resolveGeometry_ = program_.kernel("lpv_resolve_geometry");
   faceGeometryKernel_ = program_.kernel("lpv_face_geometry");
-  propagate_ = program_.kernel("lpv_propagate");
+  propagateBlocked_ = program_.kernel("lpv_propagate_blocked");
+  propagateOpen_ = program_.kernel("lpv_propagate_open");
   toLookupGrid_ = program_.kernel("lpv_lookup_grid");
   lookup_ = program_.kernel("lpv_lookup");
   size_t cells = cellsPerGrid() * cascades_, nodes = nodesPerGrid() * cascades_;
   layout_ = cl::Buffer(ctx, size_t(cascades_) * 16, CL_MEM_READ_ONLY, "lpv cascade layout");
   gridAcc_ = cl::Buffer(ctx, cells * 3 * 4 * 8, CL_MEM_READ_WRITE, "lpv injection sums");
   geometryAcc_ = cl::Buffer(ctx, nodes * 2 * 4 * 8, CL_MEM_READ_WRITE, "lpv geometry sums");
-  size_t gridBytes = (kPad + planeStride() * 12 * cascades_) * sizeof(float);
+  size_t gridBytes = gridFloats() * sizeof(float);
   for (cl::Buffer& g : grids_) {
     g = cl::Buffer(ctx, gridBytes, CL_MEM_READ_WRITE, "lpv grid");
     ctx.fill(g, 0.0f);  // the padding stays 0
@@ -136,7 +137,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   ctx.fill(accumulated_, 0.0f);
   geometry_ = cl::Buffer(ctx, nodes * 16, CL_MEM_READ_WRITE, "lpv geometry volume");
   ctx.fill(geometry_, 0.0f);
-  faceGeometry_ = cl::Buffer(ctx, (kPad + planeStride() * 12 * cascades_) * sizeof(float), CL_MEM_READ_WRITE,
+  faceGeometry_ = cl::Buffer(ctx, gridBytes, CL_MEM_READ_WRITE,
                              "lpv face blocking potential");
   ctx.fill(faceGeometry_, 0.0f);  // padding and skew stay 0
   lookupGrid_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv lookup grid");
@@ -144,6 +145,12 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_));  // one cascade
   propagateRange_.local[0] = size_t(n_ / lanes_);
   propagateRange_.local[1] = propagateRange_.local[2] = 1;
+}
+
+size_t LpvVolume::gridOffset(int k, int p, size_t cell) const {
+  size_t n = size_t(n_), x = cell % n, y = cell / n % n, z = cell / (n * n);
+  size_t slice = 12 * n * n + kSkew;
+  return kPad + (size_t(k) * n + z) * slice + y * 12 * n + size_t(p) * n + x;
 }
 
 uint64_t LpvVolume::bytes() const {
@@ -196,10 +203,10 @@ void LpvVolume::resolve(bool geometry) {
 void LpvVolume::setInjected(const std::vector<glm::vec4>& coefficients) {
   size_t cells = cellsPerGrid();
   if (coefficients.size() != cells * 3 * cascades_) throw Error("lpv: injected grid of the wrong size");
-  std::vector<float> planes(kPad + planeStride() * 12 * cascades_, 0.0f);
+  std::vector<float> planes(gridFloats(), 0.0f);
   for (size_t i = 0; i < coefficients.size(); ++i) {  // i = (k·3 + ch)·cells + cell
     size_t kch = i / cells, cell = i % cells;
-    for (int c = 0; c < 4; ++c) planes[kPad + (kch * 4 + c) * planeStride() + cell] = coefficients[i][c];
+    for (int c = 0; c < 4; ++c) planes[gridOffset(int(kch / 3), int(kch % 3) * 4 + c, cell)] = coefficients[i][c];
   }
   ctx_.write(grids_[0], planes.data(), planes.size() * sizeof(float));
   ctx_.write(accumulated_, planes.data(), planes.size() * sizeof(float));
@@ -212,7 +219,7 @@ std::vector<glm::vec4> LpvVolume::readGrid(const cl::Buffer& b) {
   std::vector<glm::vec4> out(cells * 3 * cascades_);
   for (size_t i = 0; i < out.size(); ++i) {
     size_t kch = i / cells, cell = i % cells;
-    for (int c = 0; c < 4; ++c) out[i][c] = planes[kPad + (kch * 4 + c) * planeStride() + cell];
+    for (int c = 0; c < 4; ++c) out[i][c] = planes[gridOffset(int(kch / 3), int(kch % 3) * 4 + c, cell)];
   }
   return out;
 }
@@ -249,8 +256,13 @@ void LpvVolume::propagate(int iterations, bool blocking) {
     current_ = start;
     for (int i = 0; i < iterations; ++i) {
       // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
-      propagate_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k, int(blocking && i > 0));
-      ctx_.launch(propagate_, propagateRange_, "lpv: propagate");
+      if (blocking && i > 0) {
+        propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k);
+        ctx_.launch(propagateBlocked_, propagateRange_, "lpv: propagate");
+      } else {
+        propagateOpen_.args(grids_[current_], grids_[1 - current_], accumulated_, k);
+        ctx_.launch(propagateOpen_, propagateRange_, "lpv: propagate");
+      }
       current_ = 1 - current_;
     }
   }

@@ -63,8 +63,8 @@ private:
 class LpvVolume {
 public:
   static constexpr int kRunLength = 16;  // texels a work-item merges before its atomic adds
-  static constexpr int kPad = 16;        // floats before the grid planes (lpv.cl)
-  static constexpr int kSkew = 32;       // floats after each plane (lpv.cl LPV_SKEW: planes not 2^k apart)
+  static constexpr int kPad = 16;        // floats before the grids (lpv.cl)
+  static constexpr int kSkew = 32;       // floats after each z slice (lpv.cl LPV_SKEW: slices not 2^k bytes apart)
   static constexpr float kGeometryFixedScale = 1099511627776.0f;  // 2^40
 
   // Throws gi::Error when `storage` is Image and the device has no 3D images of the size needed.
@@ -74,7 +74,10 @@ public:
   int cascadeCount() const { return cascades_; }
   size_t cellsPerGrid() const { return size_t(n_) * n_ * n_; }
   size_t nodesPerGrid() const { return size_t(n_ + 1) * (n_ + 1) * (n_ + 1); }
-  size_t planeStride() const { return cellsPerGrid() + kSkew; }  // floats from one grid plane to the next
+  // The float grids' row-block layout (lpv.cl LPV_AT): floats in all cascades, and the offset of
+  // plane p (channel·4 + coefficient) of cell (z·N + y)·N + x of cascade k.
+  size_t gridFloats() const { return kPad + (12 * cellsPerGrid() + size_t(kSkew) * n_) * cascades_; }
+  size_t gridOffset(int k, int p, size_t cell) const;
   uint64_t bytes() const;
 
   // Per frame, in this order.
@@ -110,7 +113,7 @@ private:
   int n_, cascades_, vw_, lanes_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
   float injectionScale_ = 1.0f;
   cl::Program program_;
-  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, faceGeometryKernel_, propagate_,
+  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, faceGeometryKernel_, propagateBlocked_, propagateOpen_,
       toLookupGrid_, lookup_;
   cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, faceGeometry_, lookupGrid_;
   LpvImage lookupImage_;  // with LpvLookupStorage::Image: lookupGrid_'s copy the lookup samples
