@@ -6,7 +6,9 @@
 //   - the depth-aware blur never mixes values across a depth discontinuity;
 //   - the occlusion kernel equals a host implementation of the same formulas (occlusion and the
 //     eq. 3.5 colour-bleeding irradiance), and the blur + composition equals its host mirror;
-//   - chains: `vpl+ssao` is (1 − occlusion) × `vpl`; malformed chains are rejected.
+//   - chains: `vpl+ssao` is (1 − occlusion) × `vpl`; malformed chains are rejected;
+//   - the first four again with ssao.downsample = 2 (occlusion on the half-resolution grid, the
+//     depth-aware blur per camera pixel over the grid).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -65,41 +67,68 @@ SsaoRun runSsao(Renderer& r, const SsaoSettings& s) {
   return {download<float>(t.rawOcclusion()), download<float>(t.occlusion())};
 }
 
-SsaoSettings settingsFor(const Renderer& r, float radius, bool bleeding) {
+SsaoSettings settingsFor(const Renderer& r, float radius, bool bleeding, int downsample) {
   SsaoSettings s = ssaoSettings(r.params(), Bounds{}, true);
   s.radius = radius;
   s.bias = 0.01f * radius;
   s.bleeding = bleeding;
+  s.downsample = downsample;
   return s;
 }
 
-}  // namespace
+// The occlusion grid of ssao.downsample = D: grid pixel (u, v) is camera pixel (D·u, D·v).
+struct Grid {
+  int D, W, H, gw, gh;
+  Grid(int d, int w, int h) : D(d), W(w), H(h), gw((w + d - 1) / d), gh((h + d - 1) / d) {}
+  int camera(int u, int v) const { return D * v * W + D * u; }
+};
 
-TEST(Ssao, FlatFloorHasNoOcclusion) {
+// The half-resolution blur's acceptance test, from the G-buffer: camera pixel p's depth relative to
+// the depth of the tangent plane of the surface seen at camera pixel q on p's view ray,
+// n_q·(P − C)/n_q·(Q − C) − 1 (C the camera position; P lies on p's ray).
+struct PlaneTest {
+  std::vector<float> pos, gn;
+  glm::vec3 C;
+  explicit PlaneTest(const GBuffer& g)
+      : pos(download<float>(g.position)), gn(download<float>(g.geoNormal)),
+        C(glm::inverse(glm::make_mat4(g.view.view))[3]) {}
+  float offset(int p, int q) const {
+    glm::vec3 P(pos[4 * p], pos[4 * p + 1], pos[4 * p + 2]), Q(pos[4 * q], pos[4 * q + 1], pos[4 * q + 2]);
+    glm::vec3 n(gn[4 * q], gn[4 * q + 1], gn[4 * q + 2]);
+    return glm::dot(n, P - C) / glm::dot(n, Q - C) - 1.0f;
+  }
+  bool accepts(int p, int q, float tau) const { return pos[4 * q + 3] != 0.0f && std::fabs(offset(p, q)) <= tau; }
+};
+
+void flatFloorHasNoOcclusion(int downsample) {
   Scene s = floorAndWall(false);
   s.cameras.push_back(lookAtCamera(glm::vec3(0.3f, 1.2f, 2.5f), glm::vec3(0, 0, -1.5f), 1.0f));
   Renderer r(context(), s, directSettings(96, 64));
   r.renderFrame();
-  SsaoRun run = runSsao(r, settingsFor(r, 0.5f, false));
+  SsaoRun run = runSsao(r, settingsFor(r, 0.5f, false, downsample));
   auto pos = download<float>(r.gbuffer().position);
+  Grid grid(downsample, r.width(), r.height());
   int floorPixels = 0;
-  for (size_t i = 0; i < run.raw.size(); ++i) {
+  for (int v = 0; v < grid.gh; ++v)
+    for (int u = 0; u < grid.gw; ++u)
+      if (pos[4 * grid.camera(u, v) + 3] != 0.0f) ASSERT_EQ(run.raw[v * grid.gw + u], 0.0f) << "grid pixel " << u << "," << v;
+  for (size_t i = 0; i < run.blurred.size(); ++i) {
     if (pos[4 * i + 3] == 0.0f) continue;
     ++floorPixels;
-    ASSERT_EQ(run.raw[i], 0.0f) << "pixel " << i;
     ASSERT_EQ(run.blurred[i], 0.0f) << "pixel " << i;
   }
   EXPECT_GT(floorPixels, 3000);
 }
 
-TEST(Ssao, CornerOcclusionIsTheBlockedFractionOfTheHemisphere) {
+void cornerOcclusionIsTheBlockedFraction(int downsample) {
   const float wallZ = -1.0f, R = 1.0f;
   Scene s = floorAndWall(true, wallZ);
   s.cameras.push_back(lookAtCamera(glm::vec3(0, 1.2f, 1.0f), glm::vec3(0, 0.2f, wallZ), 1.0f));
   Renderer r(context(), s, directSettings(200, 150));
   r.renderFrame();
-  SsaoSettings st = settingsFor(r, R, false);
+  SsaoSettings st = settingsFor(r, R, false, downsample);
   SsaoRun run = runSsao(r, st);
+  Grid grid(downsample, r.width(), r.height());
   auto pos = download<float>(r.gbuffer().position);
   auto nrm = download<float>(r.gbuffer().geoNormal);
   // Kernel vector i (length s_i, horizontal part h_i = s_i·sin θ_i) rotated about the floor normal
@@ -121,29 +150,54 @@ TEST(Ssao, CornerOcclusionIsTheBlockedFractionOfTheHemisphere) {
   const float edges[] = {0.0f, 0.1f, 0.2f, 0.35f, 0.5f, 0.75f, 1.1f};
   // Floor pixels whose samples all stay on screen (|x| < 0.6 m).
   auto counted = [&](size_t i) { return pos[4 * i + 3] != 0.0f && nrm[4 * i + 1] >= 0.99f && std::fabs(pos[4 * i]) < 0.6f; };
+  // Raw values per grid pixel, blurred values per camera pixel, each against the analytic value at
+  // its own surface point.
   for (int b = 0; b + 1 < int(std::size(edges)); ++b) {
-    double raw = 0, blurred = 0, exp = 0;
-    int n = 0;
-    for (size_t i = 0; i < run.raw.size(); ++i) {
-      if (!counted(i)) continue;
+    auto inBin = [&](size_t i) {
       float d = pos[4 * i + 2] - wallZ;
-      if (d < edges[b] * R || d >= edges[b + 1] * R) continue;
-      raw += run.raw[i];
+      return counted(i) && d >= edges[b] * R && d < edges[b + 1] * R;
+    };
+    double raw = 0, rawExp = 0, blurred = 0, exp = 0;
+    int n = 0, nRaw = 0;
+    for (int v = 0; v < grid.gh; ++v)
+      for (int u = 0; u < grid.gw; ++u) {
+        size_t i = size_t(grid.camera(u, v));
+        if (!inBin(i)) continue;
+        raw += run.raw[v * grid.gw + u];
+        rawExp += expected(pos[4 * i + 2] - wallZ);
+        ++nRaw;
+      }
+    for (size_t i = 0; i < run.blurred.size(); ++i) {
+      if (!inBin(i)) continue;
       blurred += run.blurred[i];
-      exp += expected(d);
+      exp += expected(pos[4 * i + 2] - wallZ);
       ++n;
     }
     ASSERT_GT(n, 100) << "bin " << b;
-    raw /= n, blurred /= n, exp /= n;
-    std::printf("corner, d/R in [%.2f, %.2f): %5d px, occlusion raw %.4f, blurred %.4f, analytic %.4f\n", edges[b],
-                edges[b + 1], n, raw, blurred, exp);
-    EXPECT_NEAR(raw, exp, 0.05 * cornerValue) << "bin " << b;
+    ASSERT_GT(nRaw, 100 / (downsample * downsample)) << "bin " << b;
+    raw /= nRaw, rawExp /= nRaw, blurred /= n, exp /= n;
+    std::printf("corner, downsample %d, d/R in [%.2f, %.2f): %5d px, occlusion raw %.4f (analytic %.4f), blurred %.4f "
+                "(analytic %.4f)\n",
+                downsample, edges[b], edges[b + 1], n, raw, rawExp, blurred, exp);
+    EXPECT_NEAR(raw, rawExp, 0.05 * cornerValue) << "bin " << b;
     EXPECT_NEAR(blurred, exp, 0.05 * cornerValue) << "bin " << b;
   }
 }
 
-TEST(Ssao, BlurNeverCrossesDepthDiscontinuities) {
-  // A quad 1 m in front of the wall: its silhouette is a depth jump of ~1/3 of the view depth.
+}  // namespace
+
+TEST(Ssao, FlatFloorHasNoOcclusion) { flatFloorHasNoOcclusion(1); }
+TEST(Ssao, FlatFloorHasNoOcclusionHalfResolution) { flatFloorHasNoOcclusion(2); }
+TEST(Ssao, CornerOcclusionIsTheBlockedFractionOfTheHemisphere) { cornerOcclusionIsTheBlockedFraction(1); }
+TEST(Ssao, CornerOcclusionIsTheBlockedFractionOfTheHemisphereHalfResolution) { cornerOcclusionIsTheBlockedFraction(2); }
+
+namespace {
+
+// A quad 1 m in front of the wall: its silhouette is a depth jump of ~1/3 of the view depth.
+// Synthetic raw input per grid pixel: occlusion 1 and E = 1 on the near quad (instance 2), 0
+// elsewhere; every blurred value must be its own surface's (at half resolution: 0 where no grid
+// pixel of the window lies on the pixel's surface, checked on the host).
+void blurNeverCrossesDepthDiscontinuities(int downsample) {
   Scene s = floorAndWall(true, -2.0f);
   addQuad(s, glm::vec3(-0.5f, 0.3f, -1.0f), glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), 0);
   s.computeBounds();
@@ -154,40 +208,78 @@ TEST(Ssao, BlurNeverCrossesDepthDiscontinuities) {
   FrameResources f = r.frameResources(true);
   SsaoTechnique t;
   t.setup(f);
-  SsaoSettings st = settingsFor(r, 0.3f, true);
+  SsaoSettings st = settingsFor(r, 0.3f, true, downsample);
   t.occlusionPass(f, st);  // builds the program; its raw output is replaced below
-  // Synthetic raw input: occlusion 1 and E = 1 on the near quad (instance 2), 0 elsewhere.
   auto depth = download<float>(r.gbuffer().visibility.depth);
   auto instance = download<uint32_t>(r.gbuffer().instance);
   size_t n = depth.size();
-  std::vector<float> occ(n), E(4 * n, 0.0f);
+  Grid grid(downsample, r.width(), r.height());
+  size_t gn = size_t(grid.gw) * grid.gh;
+  std::vector<float> occ(gn), E(4 * gn, 0.0f);
+  for (int v = 0; v < grid.gh; ++v)
+    for (int u = 0; u < grid.gw; ++u) {
+      size_t k = size_t(v) * grid.gw + u;
+      occ[k] = instance[grid.camera(u, v)] == 2 ? 1.0f : 0.0f;
+      for (int c = 0; c < 3; ++c) E[4 * k + c] = occ[k];
+    }
   int near = 0, far = 0;
   for (size_t i = 0; i < n; ++i) {
-    bool isNear = instance[i] == 2;
-    near += isNear;
-    far += !isNear && std::isfinite(depth[i]);
-    occ[i] = isNear ? 1.0f : 0.0f;
-    for (int c = 0; c < 3; ++c) E[4 * i + c] = occ[i];
+    near += instance[i] == 2;
+    far += instance[i] != 2 && std::isfinite(depth[i]);
   }
   ASSERT_GT(near, 200);
   ASSERT_GT(far, 1000);
-  ctx.write(t.rawOcclusion(), occ.data(), n * 4);
-  ctx.write(t.rawIrradiance(), E.data(), n * 16);
+  ctx.write(t.rawOcclusion(), occ.data(), gn * 4);
+  ctx.write(t.rawIrradiance(), E.data(), gn * 16);
   cl::Buffer indirect(ctx, n * 16);
   ctx.fill(indirect, 1.0f);
   t.blurComposePass(f, st, true, indirect);
   auto blurred = download<float>(t.occlusion());
   auto out = download<float>(indirect);
   const float rhoOverPi = 0.6f / float(M_PI);
-  for (size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(depth[i])) continue;
-    ASSERT_EQ(blurred[i], occ[i]) << "pixel " << i;
-    // (1 − occlusion)·1 + ρ/π·E: ρ/π on the near quad, 1 elsewhere.
-    ASSERT_NEAR(out[4 * i], occ[i] == 1.0f ? rhoOverPi : 1.0f, 1e-6f) << "pixel " << i;
-  }
+  const PlaneTest planes(r.gbuffer());
+  int uncovered = 0;
+  for (int y = 0; y < grid.H; ++y)
+    for (int x = 0; x < grid.W; ++x) {
+      size_t i = size_t(y) * grid.W + x;
+      if (!std::isfinite(depth[i])) continue;
+      float own = instance[i] == 2 ? 1.0f : 0.0f;
+      if (downsample == 2) {
+        // Does the window hold a grid pixel of the pixel's surface? (Half-float rounding of the
+        // kernel's plane gradients could flip a decision within ~1e-4 of tau; none here.)
+        bool covered = false;
+        for (int j = 0; j < 4; ++j)
+          for (int k = 0; k < 4; ++k) {
+            int u = (x + 1) / 2 - 2 + k, v = (y + 1) / 2 - 2 + j;
+            if (u < 0 || v < 0 || u >= grid.gw || v >= grid.gh) continue;
+            covered |= planes.accepts(int(i), grid.camera(u, v), st.blurTau);
+          }
+        if (!covered) {
+          ++uncovered;
+          ASSERT_EQ(blurred[i], 0.0f) << "pixel " << x << "," << y;
+          ASSERT_EQ(out[4 * i], 1.0f) << "pixel " << x << "," << y;
+          continue;
+        }
+      }
+      ASSERT_EQ(blurred[i], own) << "pixel " << x << "," << y;
+      // (1 − occlusion)·1 + ρ/π·E: ρ/π on the near quad, 1 elsewhere.
+      ASSERT_NEAR(out[4 * i], own == 1.0f ? rhoOverPi : 1.0f, 1e-6f) << "pixel " << x << "," << y;
+    }
+  std::printf("downsample %d: %d pixels without a grid pixel of their surface in the window\n", downsample, uncovered);
+  EXPECT_LE(uncovered, near / 50);
 }
 
-TEST(Ssao, KernelMatchesHostImplementation) {
+}  // namespace
+
+TEST(Ssao, BlurNeverCrossesDepthDiscontinuities) { blurNeverCrossesDepthDiscontinuities(1); }
+TEST(Ssao, BlurNeverCrossesDepthDiscontinuitiesHalfResolution) { blurNeverCrossesDepthDiscontinuities(2); }
+
+namespace {
+
+// With downsample = 2 the host evaluates grid pixel (u, v) at camera pixel (2u, 2v), and a sample
+// projected to s reads the grid pixel ⌊s/2 + ¼⌋ (the one whose camera pixel centre is nearest),
+// i.e. the surface seen at camera pixel 2⌊s/2 + ¼⌋.
+void kernelMatchesHostImplementation(int downsample) {
   cl::Context& ctx = context();
   Scene s = makeCornellBox();
   const int W = 64, H = 64;
@@ -196,7 +288,9 @@ TEST(Ssao, KernelMatchesHostImplementation) {
   FrameResources f = r.frameResources(false);
   SsaoTechnique t;
   t.setup(f);
-  SsaoSettings st = settingsFor(r, 0.08f, true);
+  SsaoSettings st = settingsFor(r, 0.08f, true, downsample);
+  const Grid grid(downsample, W, H);
+  const int D = downsample;
   t.occlusionPass(f, st);
   auto occK = download<float>(t.rawOcclusion());
   auto EK = download<float>(t.rawIrradiance());
@@ -215,11 +309,11 @@ TEST(Ssao, KernelMatchesHostImplementation) {
   glm::mat4 invView = glm::inverse(view);
   auto v3 = [](const std::vector<float>& b, int i) { return glm::vec3(b[4 * i], b[4 * i + 1], b[4 * i + 2]); };
   int exact = 0, surfaces = 0;
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      int p = y * W + x;
+  for (int y = 0; y < grid.gh; ++y)
+    for (int x = 0; x < grid.gw; ++x) {
+      int p = grid.camera(x, y), k = y * grid.gw + x;  // camera pixel, grid pixel
       if (pos[4 * p + 3] == 0.0f) {
-        ASSERT_EQ(occK[p], 0.0f);
+        ASSERT_EQ(occK[k], 0.0f);
         continue;
       }
       ++surfaces;
@@ -238,8 +332,9 @@ TEST(Ssao, KernelMatchesHostImplementation) {
         if (S.z <= 0) continue;
         glm::vec4 clip = viewProj * (invView * glm::vec4(S.x, S.y, -S.z, 1.0f));
         float sx = (clip.x / clip.w * 0.5f + 0.5f) * W, sy = (0.5f - clip.y / clip.w * 0.5f) * H;
-        if (!(sx >= 0 && sx < W && sy >= 0 && sy < H)) continue;
-        int q = int(sy) * W + int(sx);
+        float tx = D == 1 ? sx : sx / D + 0.25f, ty = D == 1 ? sy : sy / D + 0.25f;
+        if (!(tx >= 0 && tx < grid.gw && ty >= 0 && ty < grid.gh)) continue;
+        int q = grid.camera(int(tx), int(ty));
         if (pos[4 * q + 3] == 0.0f) continue;
         // Occluded when S lies more than the bias behind the tangent plane of the surface seen at q
         // (G-buffer position and geometric normal, which faces the camera).
@@ -255,11 +350,11 @@ TEST(Ssao, KernelMatchesHostImplementation) {
       float occH = float(occluded) / st.samples;
       // Rounding (FMA contraction, the kernel's depth-reconstructed P and half-float plane
       // gradients) may flip a sample lying on a decision boundary.
-      ASSERT_LE(std::fabs(occK[p] - occH), 1.5f / st.samples) << "pixel " << x << "," << y;
-      if (occK[p] != occH) continue;
+      ASSERT_LE(std::fabs(occK[k] - occH), 1.5f / st.samples) << "grid pixel " << x << "," << y;
+      if (occK[k] != occH) continue;
       ++exact;
       for (int ch = 0; ch < 3; ++ch)
-        ASSERT_NEAR(EK[4 * p + ch], E[ch], 1e-4f * E[ch] + 1e-7f) << "pixel " << x << "," << y << " channel " << ch;
+        ASSERT_NEAR(EK[4 * k + ch], E[ch], 1e-4f * E[ch] + 1e-7f) << "grid pixel " << x << "," << y << " channel " << ch;
     }
   std::printf("kernel vs host: %d of %d surface pixels with identical sample decisions\n", exact, surfaces);
   EXPECT_GE(exact, int(0.99 * surfaces));
@@ -269,6 +364,7 @@ TEST(Ssao, KernelMatchesHostImplementation) {
   t.blurComposePass(f, st, false, indirect);
   auto blurK = download<float>(t.occlusion());
   auto outK = download<float>(indirect);
+  const PlaneTest planes(g);
   auto albedo = download<float>(g.albedo);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
@@ -276,21 +372,36 @@ TEST(Ssao, KernelMatchesHostImplementation) {
       if (!std::isfinite(depth[p])) continue;
       float occ = 0, cnt = 0;
       glm::vec3 E(0.0f);
+      // The 4x4 window of grid pixels: offsets -2..1 around the pixel (around (x+1)/2 on the
+      // half-resolution grid).
+      const int cx = D == 1 ? x : (x + 1) / 2, cy = D == 1 ? y : (y + 1) / 2;
       for (int dy = -2; dy <= 1; ++dy)
         for (int dx = -2; dx <= 1; ++dx) {
-          int xx = x + dx, yy = y + dy;
-          if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
-          int q = yy * W + xx;
-          if (!(std::fabs(depth[q] - depth[p]) <= st.blurTau * depth[p])) continue;
+          int u = cx + dx, v = cy + dy;
+          if (u < 0 || v < 0 || u >= grid.gw || v >= grid.gh) continue;
+          int q = v * grid.gw + u;
+          bool accepted = D == 1 ? std::fabs(depth[q] - depth[p]) <= st.blurTau * depth[p]
+                                 : planes.accepts(p, grid.camera(u, v), st.blurTau);
+          if (!accepted) continue;
           occ += occK[q];
           E += v3(EK, q);
           cnt += 1;
         }
+      if (cnt == 0) {  // half resolution only: no grid pixel of this depth in the window
+        ASSERT_EQ(D, 2);
+        ASSERT_EQ(blurK[p], 0.0f);
+        continue;
+      }
       ASSERT_NEAR(blurK[p], occ / cnt, 1e-6f);
       glm::vec3 out = v3(albedo, p) * float(1.0 / M_PI) * E / cnt;
       for (int ch = 0; ch < 3; ++ch) ASSERT_NEAR(outK[4 * p + ch], out[ch], 1e-5f * out[ch] + 1e-9f);
     }
 }
+
+}  // namespace
+
+TEST(Ssao, KernelMatchesHostImplementation) { kernelMatchesHostImplementation(1); }
+TEST(Ssao, KernelMatchesHostImplementationHalfResolution) { kernelMatchesHostImplementation(2); }
 
 TEST(Ssao, ChainOccludesTheIndirectTermOfTheTechniqueBeforeIt) {
   cl::Context& ctx = context();

@@ -28,6 +28,10 @@
 #ifndef GI_SSAO_SAMPLES
 #define GI_SSAO_SAMPLES 16
 #endif
+// Occlusion evaluated on every GI_SSAO_DOWN-th camera pixel in x and y (1 or 2; see ssao_depth_planes).
+#ifndef GI_SSAO_DOWN
+#define GI_SSAO_DOWN 1
+#endif
 
 // How (PERFORMANCE_FACTS.md): one work-item handles GI_VW adjacent pixels of a row as lanes of
 // floatV (16 on CPU devices, 1 on GPUs); every per-pixel branch of the formulas above is a lane
@@ -98,20 +102,37 @@ inline floatV ssao_half_value(uintV h) {
 //   1/depth of that plane at pixel coordinates s = A·(1 + g·(s − centre of q))   exactly;
 // for the plane n·c = w: 1/depth(s) = n·r(s)/w with the ray r(s) = ((sx − cx)/fx, (cy − sy)/fy, 1),
 // hence g = (n.x/fx, −n.y/fy)/(n·r(q)). GI_VW pixels of a row per work-item (lanes).
-kernel void ssao_depth_planes(int width, int height, GiView camera, float4 projection, global const float* depth,
-                              global const float4* geoNormal, global uint2* records) {
+// GI_SSAO_DOWN = 2 (`ssao.downsample=2`): the occlusion is evaluated on a half-resolution grid,
+// grid pixel (u, v) standing for camera pixel (2u, 2v); the records are then per grid pixel (the
+// plane of the surface seen at that camera pixel, gradients still per camera pixel), and this pass
+// also copies the grid pixels' depth and geometric normal into gridDepth and gridNormal so that the
+// occlusion reads them contiguously. With GI_SSAO_DOWN = 1 the grid is the camera image and
+// gridDepth/gridNormal are not written.
+kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView camera, float4 projection,
+                              global const float* depth, global const float4* geoNormal, global uint2* records,
+                              global float* gridDepth, global float4* gridNormal) {
   int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
-  if (px0 >= width || y >= height) return;
-  int i0 = y * width + px0, valid = min(GI_VW, width - px0);
+  if (px0 >= gridWidth || y >= gridHeight) return;
+  int i0 = y * gridWidth + px0, valid = min(GI_VW, gridWidth - px0);
   float tmp[4 * GI_VW];
-  floatV z = ssao_load1(depth, i0, valid), wx, wy, wz, unused;
+  floatV z, wx, wy, wz, unused;
+#if GI_SSAO_DOWN == 1
+  z = ssao_load1(depth, i0, valid);
   SSAO_LOAD4(geoNormal, i0, valid, wx, wy, wz, unused)
+#else
+  // Camera pixels (D·u, D·v) of the lanes (the last valid one repeated): gathered.
+  intV src = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, gridWidth - 1);
+  z = GI_GATHER(floatV, depth, src);
+  GI_GATHER_AOS4(float, (global const float*)geoNormal, src, wx, wy, wz, unused)
+  ssao_store1(gridDepth, i0, valid, z);
+  SSAO_STORE4(gridNormal, i0, valid, wx, wy, wz, unused)
+#endif
   const float* V = camera.view;
   floatV nx = V[0] * wx + V[4] * wy + V[8] * wz, ny = V[1] * wx + V[5] * wy + V[9] * wz;
   floatV nz = -(V[2] * wx + V[6] * wy + V[10] * wz);
   const float fx = projection.x, fy = projection.y;
-  floatV rx = (convert_floatV(px0 + GI_LANES) + (0.5f - projection.z)) * (1.0f / fx);
-  float ry = (projection.w - (float)y - 0.5f) * (1.0f / fy);
+  floatV rx = (GI_SSAO_DOWN * convert_floatV(px0 + GI_LANES) + (0.5f - projection.z)) * (1.0f / fx);
+  float ry = (projection.w - (float)(GI_SSAO_DOWN * y) - 0.5f) * (1.0f / fy);
   floatV nr = nx * rx + ny * ry + nz;
   nr = copysign(fmax(fabs(nr), 1e-12f), nr);  // a plane seen edge-on: clamped gradients
   floatV inr = 1.0f / nr;
@@ -132,14 +153,17 @@ kernel void ssao_depth_planes(int width, int height, GiView camera, float4 proje
 // kernelVectors: GI_SSAO_SAMPLES float4 (tangent-space x, y, z along n_g, already scaled by the
 // length factor lerp(0.1, 1, (i/N)²)); rotations: 16 float2 (cos, sin) for the 4×4 noise tile;
 // records: ssao_depth_planes(). position, normal and direct are read only with bleeding on.
-kernel void ssao_occlusion(int width, int height, GiView camera, float4 projection, global const float* depth,
-                           global const float4* geoNormal, global const uint2* records,
+// The grid (gridWidth × gridHeight) is the camera image or, with GI_SSAO_DOWN = 2, the
+// half-resolution grid of ssao_depth_planes (depth, geoNormal and records per grid pixel; position,
+// normal and direct stay camera images of the given width). Outputs per grid pixel.
+kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView camera, float4 projection,
+                           global const float* depth, global const float4* geoNormal, global const uint2* records,
                            constant float4* kernelVectors, constant float2* rotations, float radius, float bias,
                            int bleeding, global const float4* position, global const float4* normal,
                            global const float4* direct, global float* occlusionOut, global float4* irradianceOut) {
   int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
-  if (px0 >= width || y >= height) return;
-  int i0 = y * width + px0, valid = min(GI_VW, width - px0);
+  if (px0 >= gridWidth || y >= gridHeight) return;
+  int i0 = y * gridWidth + px0, valid = min(GI_VW, gridWidth - px0);
   float tmp[4 * GI_VW];
   const float fx = projection.x, fy = projection.y, cx = projection.z, cy = projection.w;
   floatV zP = ssao_load1(depth, i0, valid);
@@ -165,14 +189,21 @@ kernel void ssao_occlusion(int width, int height, GiView camera, float4 projecti
   floatV Tx = kx * (rc * t0x + rs * b0x), Ty = ky * (rc * t0y + rs * b0y), Tz = radius * (rc * t0z + rs * b0z);
   floatV Bx = kx * (rc * b0x - rs * t0x), By = ky * (rc * b0y - rs * t0y), Bz = radius * (rc * b0z - rs * t0z);
   floatV Nx = kx * gx, Ny = ky * gy, Nz = radius * gz;
-  floatV Px = zP * (convert_floatV(px0 + GI_LANES) + (0.5f - cx)), Py = zP * ((float)y + 0.5f - cy), Pz = zP;
-  const float W = (float)width, H = (float)height;
+  const float D = (float)GI_SSAO_DOWN;  // camera pixels per grid pixel
+  floatV Px = zP * (D * convert_floatV(px0 + GI_LANES) + (0.5f - cx)), Py = zP * (D * (float)y + 0.5f - cy), Pz = zP;
+  const float W = (float)gridWidth, H = (float)gridHeight;
   global const uint* rec = (global const uint*)records;
   // Bleeding (eq. 3.5) in world space, from the G-buffer.
   floatV Pwx = (floatV)(0.0f), Pwy = Pwx, Pwz = Pwx, nx = Pwx, ny = Pwx, nz = Pwx;
   if (bleeding) {
+#if GI_SSAO_DOWN == 1
     SSAO_LOAD4(position, i0, valid, Pwx, Pwy, Pwz, unused)
     SSAO_LOAD4(normal, i0, valid, nx, ny, nz, unused)
+#else
+    intV own = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, gridWidth - 1);
+    GI_GATHER_AOS4(float, (global const float*)position, own, Pwx, Pwy, Pwz, unused)
+    GI_GATHER_AOS4(float, (global const float*)normal, own, nx, ny, nz, unused)
+#endif
   }
   const float As = GI_PI * radius * radius / (float)GI_SSAO_SAMPLES;
   const float d2min = radius * radius / (float)GI_SSAO_SAMPLES;  // A_s/π
@@ -188,16 +219,23 @@ kernel void ssao_occlusion(int width, int height, GiView camera, float4 projecti
     floatV Sz = Pz + k.x * Tz + k.y * Bz + k.z * Nz;
     floatV inv = 1.0f / Sz;
     floatV sx = cx + Sx * inv, sy = cy + Sy * inv;
-    // The sample's pixel (ix, iy) = floor(s) for s > −1 (truncation of s + 1, minus 1, the float
-    // clamped first so that the conversion is defined; NaN -> −1); off the image or at depth <= 0
-    // (behind the camera): no information, not occluded.
-    intV ix = convert_intV(fmin(fmax(sx + 1.0f, 0.0f), W + 1.0f)) - 1;
-    intV iy = convert_intV(fmin(fmax(sy + 1.0f, 0.0f), H + 1.0f)) - 1;
-    intV ok = (Sz > 0.0f) & (as_uintV(ix) < (uint)width) & (as_uintV(iy) < (uint)height);
-    intV q = GI_SEL((intV)(0), iy * width + ix, ok);
+    // The sample's grid pixel (ix, iy) = floor(t) for t > −1 (truncation of t + 1, minus 1, the
+    // float clamped first so that the conversion is defined; NaN -> −1), t = s on the camera image,
+    // t = (s − ½)/2 + ½ on the half-resolution grid (the grid pixel whose camera pixel centre is
+    // nearest); off the grid or at depth <= 0 (behind the camera): no information, not occluded.
+#if GI_SSAO_DOWN == 1
+    floatV tx = sx, ty = sy;
+#else
+    floatV tx = sx * (1.0f / D) + (0.5f - 0.5f / D), ty = sy * (1.0f / D) + (0.5f - 0.5f / D);
+#endif
+    intV ix = convert_intV(fmin(fmax(tx + 1.0f, 0.0f), W + 1.0f)) - 1;
+    intV iy = convert_intV(fmin(fmax(ty + 1.0f, 0.0f), H + 1.0f)) - 1;
+    intV ok = (Sz > 0.0f) & (as_uintV(ix) < (uint)gridWidth) & (as_uintV(iy) < (uint)gridHeight);
+    intV q = GI_SEL((intV)(0), iy * gridWidth + ix, ok);
     uintV w0, w1;
     GI_GATHER_AOS2(uint, rec, q, w0, w1);
-    floatV qx = convert_floatV(ix), qy = convert_floatV(iy);
+    // q's record describes the plane at camera pixel (D·ix, D·iy).
+    floatV qx = D * convert_floatV(ix), qy = D * convert_floatV(iy);
     floatV A = as_floatV(w0), gqx = ssao_half_value(w1 << 16), gqy = ssao_half_value(w1);
     floatV ux = qx + (0.5f - cx), uy = qy + (0.5f - cy);  // q's centre relative to the principal point
     floatV invPlane = A * (1.0f + gqx * (sx - qx - 0.5f) + gqy * (sy - qy - 0.5f));
@@ -212,7 +250,11 @@ kernel void ssao_occlusion(int width, int height, GiView camera, float4 projecti
                (fabs(1.0f - zP * A) < radius * A);
     occluded += GI_SEL((floatV)(0.0f), (floatV)(1.0f), occ);
     if (bleeding && GI_ANY(occ)) {
+#if GI_SSAO_DOWN == 1
       intV q4 = q * 4;
+#else
+      intV q4 = GI_SEL((intV)(0), (GI_SSAO_DOWN * iy) * width + GI_SSAO_DOWN * ix, ok) * 4;
+#endif
       floatV Qx = GI_GATHER(floatV, pos, q4), Qy = GI_GATHER(floatV, pos, q4 + 1), Qz = GI_GATHER(floatV, pos, q4 + 2);
       floatV vx = Qx - Pwx, vy = Qy - Pwy, vz = Qz - Pwz;
       floatV d2 = vx * vx + vy * vy + vz * vz;
@@ -293,6 +335,146 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
   // count >= 1 on surfaces (the centre always passes); background lanes (infinite depth) take
   // nothing and keep the upstream value.
   intV surface = isfinite(z);
+  floatV inv = GI_SEL(zero, one / fmax(count, one), surface);
+  occ *= inv;
+  ssao_store1(occlusionOut, i0, valid, occ);
+  floatV ix = zero, iy = zero, iz = zero, iw = zero;
+  if (upstream) SSAO_LOAD4(indirect, i0, valid, ix, iy, iz, iw)
+  floatV keep = 1.0f - occ;
+  floatV ox = keep * ix, oy = keep * iy, oz = keep * iz;
+  if (bleeding) {
+    floatV ax, ay, az, aw;
+    SSAO_LOAD4(albedo, i0, valid, ax, ay, az, aw)
+    floatV k = GI_SEL(zero, GI_INV_PI * inv, surface);
+    ox += ax * k * Ex;
+    oy += ay * k * Ey;
+    oz += az * k * Ez;
+  }
+  SSAO_STORE4(indirect, i0, valid, ox, oy, oz, iw)
+}
+
+// ssao.downsample = 2: the blur of ssao_blur_compose over the half-resolution grid, evaluated per
+// camera pixel, then the same composition. Camera pixel (x, y) averages the 4×4 grid pixels
+// (u, v) = (⌊(x+1)/2⌋ − 2 + i, ⌊(y+1)/2⌋ − 2 + j), i, j = 0..3 (any 4×4 block of the grid holds each
+// noise rotation once), skipping those whose surface does not pass through the pixel's: the depth
+// of grid pixel q's tangent plane on the pixel's view ray, from q's depth-plane record, must be
+// within tau·z of the pixel's depth z — never across depth discontinuities (the full-resolution
+// blur compares depths directly; over two camera pixels a plane seen at a grazing angle changes
+// its depth by more than tau, so the plane is extrapolated instead). A pixel with no grid pixel of
+// its surface in the window (a feature under two pixels wide) gets no occlusion and no bleeding.
+// Lanes: x0 is even; lane l's window starts at grid column c0 + ⌈l/2⌉, c0 = x0/2 − 2, so inside the
+// grid a row of the window is one vector load from c0 spread over the lanes by fixed swizzles, and
+// lane l lies 4 − 2i − (l & 1) camera pixels right of the centre of grid column c0 + ⌈l/2⌉ + i.
+#if GI_VW == 16
+#define SSAO_UP_TAP(v, i)                                                                                  \
+  ((i) == 0 ? (v).s0112233445566778 : (i) == 1 ? (v).s1223344556677889 : (i) == 2 ? (v).s233445566778899a \
+                                                                                  : (v).s3445566778899aab)
+// GI_VW consecutive depth-plane records -> their two words as lanes.
+#define SSAO_LOAD_RECORDS(p, W0, W1)                   \
+  {                                                    \
+    uint16 a_ = vload16(0, p), b_ = vload16(1, p);     \
+    W0 = (uint16)(a_.even, b_.even);                   \
+    W1 = (uint16)(a_.odd, b_.odd);                     \
+  }
+#elif GI_VW == 8
+#define SSAO_UP_TAP(v, i) \
+  ((i) == 0 ? (v).s01122334 : (i) == 1 ? (v).s12233445 : (i) == 2 ? (v).s23344556 : (v).s34455667)
+#define SSAO_LOAD_RECORDS(p, W0, W1) \
+  {                                  \
+    uint16 a_ = vload16(0, p);       \
+    W0 = a_.even;                    \
+    W1 = a_.odd;                     \
+  }
+#endif
+kernel void ssao_upsample_blur_compose(int width, int height, int gridWidth, int gridHeight,
+                                       global const float* depth, global const float4* albedo,
+                                       global const uint2* records, global const float* occlusionIn,
+                                       global const float4* irradianceIn, float tau, int upstream, int bleeding,
+                                       global float* occlusionOut, global float4* indirect) {
+  int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
+  if (px0 >= width || y >= height) return;
+  int i0 = y * width + px0, valid = min(GI_VW, width - px0);
+  float tmp[4 * GI_VW];
+  floatV z = ssao_load1(depth, i0, valid);
+  floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
+  floatV occ = zero, count = zero, Ex = zero, Ey = zero, Ez = zero;
+  intV lanes = (intV)(GI_LANES);
+  global const float* irr = (global const float*)irradianceIn;
+  global const uint* rec = (global const uint*)records;
+  int c0 = px0 / 2 - 2, v0 = (y + 1) / 2 - 2;
+#if GI_VW > 1
+  bool interior = c0 >= 0 && c0 + GI_VW <= gridWidth;
+  floatV oddLane = convert_floatV(lanes & 1);
+#endif
+#pragma unroll
+  for (int dy = 0; dy < 4; ++dy) {
+    int vv = v0 + dy;
+    if (vv < 0 || vv >= gridHeight) continue;
+    int row = vv * gridWidth;
+    float offsetY = (float)(y - 2 * vv);  // camera pixels below the grid row's pixel centres
+    floatV rA = zero, rgx = zero, rgy = zero, ro = zero, rx = zero, ry = zero, rw = zero, unused;
+#if GI_VW > 1
+    if (interior) {
+      uintV w0, w1;
+      SSAO_LOAD_RECORDS(rec + 2 * (row + c0), w0, w1)
+      rA = as_floatV(w0);
+      rgx = ssao_half_value(w1 << 16);
+      rgy = ssao_half_value(w1);
+      ro = vloadV(0, occlusionIn + row + c0);
+      if (bleeding) GI_AOS4_LOAD(irr + (size_t)(row + c0) * 4, rx, ry, rw, unused)
+    }
+#endif
+#pragma unroll
+    for (int dx = 0; dx < 4; ++dx) {
+      floatV A, gqx, gqy, offsetX, oq, ex = zero, ey = zero, ez = zero;
+      intV inside;
+#if GI_VW > 1
+      if (interior) {
+        inside = lanes >= 0;  // all lanes
+        A = SSAO_UP_TAP(rA, dx);
+        gqx = SSAO_UP_TAP(rgx, dx);
+        gqy = SSAO_UP_TAP(rgy, dx);
+        offsetX = (float)(4 - 2 * dx) - oddLane;
+        oq = SSAO_UP_TAP(ro, dx);
+        if (bleeding) {
+          ex = SSAO_UP_TAP(rx, dx);
+          ey = SSAO_UP_TAP(ry, dx);
+          ez = SSAO_UP_TAP(rw, dx);
+        }
+      } else
+#endif
+      {
+        intV x = px0 + lanes, u = (x + 1) / 2 - 2 + dx;
+        inside = (u >= 0) & (u < gridWidth);
+        intV uc = row + clamp(u, 0, gridWidth - 1);
+        uintV w0, w1;
+        GI_GATHER_AOS2(uint, rec, uc, w0, w1);
+        A = as_floatV(w0);
+        gqx = ssao_half_value(w1 << 16);
+        gqy = ssao_half_value(w1);
+        offsetX = convert_floatV(x - 2 * u);
+        oq = GI_GATHER(floatV, occlusionIn, uc);
+        if (bleeding) {
+          intV u4 = uc * 4;
+          ex = GI_GATHER(floatV, irr, u4);
+          ey = GI_GATHER(floatV, irr, u4 + 1);
+          ez = GI_GATHER(floatV, irr, u4 + 2);
+        }
+      }
+      // The pixel's depth relative to q's plane on its ray: z·(1/depth of the plane there) − 1.
+      floatV e = z * A * (1.0f + gqx * offsetX + gqy * offsetY) - 1.0f;
+      intV take = inside & (A > 0.0f) & (fabs(e) <= tau);
+      occ += GI_SEL(zero, oq, take);
+      count += GI_SEL(zero, one, take);
+      if (bleeding) {
+        Ex += GI_SEL(zero, ex, take);
+        Ey += GI_SEL(zero, ey, take);
+        Ez += GI_SEL(zero, ez, take);
+      }
+    }
+  }
+  // No grid pixel accepted (or the background): no occlusion, no bleeding, the upstream value kept.
+  intV surface = isfinite(z) & (count > 0.0f);
   floatV inv = GI_SEL(zero, one / fmax(count, one), surface);
   occ *= inv;
   ssao_store1(occlusionOut, i0, valid, occ);

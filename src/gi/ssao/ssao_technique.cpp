@@ -22,10 +22,10 @@ namespace gi {
 
 namespace {
 
-// Both kernels take `vw` adjacent pixels of a row per work-item.
-cl::NDRange pixelGroups(int vw, const GBuffer& g) {
-  int groups = (g.width + vw - 1) / vw;
-  return cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(g.height, 8), 8, 8);
+// The kernels take `vw` adjacent pixels of a row of a width × height image per work-item.
+cl::NDRange pixelGroups(int vw, int width, int height) {
+  int groups = (width + vw - 1) / vw;
+  return cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(height, 8), 8, 8);
 }
 
 }  // namespace
@@ -80,6 +80,7 @@ SsaoSettings ssaoSettings(const ParamSet& p, const Bounds& bounds, bool upstream
   s.blurTau = p.getFloat("ssao.blur_tau");
   std::string b = p.getChoice("ssao.bleeding");
   s.bleeding = b == "on" || (b == "auto" && !upstreamIndirect);
+  s.downsample = p.getInt("ssao.downsample");
   return s;
 }
 
@@ -93,31 +94,51 @@ void SsaoTechnique::setup(const FrameResources& f) {
 }
 
 void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s) {
-  if (s.samples != programSamples_) {
-    program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)}});
+  if (s.downsample != 1 && s.downsample != 2)
+    throw Error("ssao.downsample = " + std::to_string(s.downsample) + ": expected 1 or 2");
+  if (s.samples != programSamples_ || s.downsample != programDownsample_) {
+    program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)},
+                                                              {"GI_SSAO_DOWN", std::to_string(s.downsample)}});
     occlusionKernel_ = program_.kernel("ssao_occlusion");
-    blurKernel_ = program_.kernel("ssao_blur_compose");
+    blurKernel_ = program_.kernel(s.downsample == 1 ? "ssao_blur_compose" : "ssao_upsample_blur_compose");
     planesKernel_ = program_.kernel("ssao_depth_planes");
     kernelVectors_ = f.ctx.upload(ssaoKernelVectors(s.samples), "ssao kernel vectors");
     programSamples_ = s.samples;
+    programDownsample_ = s.downsample;
   }
   const GBuffer& g = f.gbuffer;
   std::array<float, 4> p = ssaoProjection(g.view);
   cl_float4 projection{{p[0], p[1], p[2], p[3]}};
-  planesKernel_.args(g.width, g.height, g.view, projection, g.visibility.depth, g.geoNormal, records_);
-  f.ctx.launch(planesKernel_, pixelGroups(f.ctx.vectorWidth(), g), "ssao: depth planes");
-  occlusionKernel_.args(g.width, g.height, g.view, projection, g.visibility.depth, g.geoNormal, records_,
-                        kernelVectors_, rotations_, s.radius, s.bias, int(s.bleeding), g.position, g.normal,
-                        f.direct, rawOcclusion_, rawIrradiance_);
-  f.ctx.launch(occlusionKernel_, pixelGroups(f.ctx.vectorWidth(), g), "ssao: occlusion");
+  const int d = s.downsample, gw = (g.width + d - 1) / d, gh = (g.height + d - 1) / d;
+  if (d == 2 && !gridDepth_) {
+    gridDepth_ = cl::Buffer(f.ctx, size_t(gw) * gh * 4, CL_MEM_READ_WRITE, "ssao grid depth");
+    gridNormal_ = cl::Buffer(f.ctx, size_t(gw) * gh * 16, CL_MEM_READ_WRITE, "ssao grid geometric normal");
+  }
+  // At full resolution the grid is the G-buffer itself (gridDepth/gridNormal are not written).
+  const cl::Buffer& depth = d == 1 ? g.visibility.depth : gridDepth_;
+  const cl::Buffer& normal = d == 1 ? g.geoNormal : gridNormal_;
+  planesKernel_.args(gw, gh, g.width, g.view, projection, g.visibility.depth, g.geoNormal, records_, depth, normal);
+  f.ctx.launch(planesKernel_, pixelGroups(f.ctx.vectorWidth(), gw, gh), "ssao: depth planes");
+  occlusionKernel_.args(gw, gh, g.width, g.view, projection, depth, normal, records_, kernelVectors_, rotations_,
+                        s.radius, s.bias, int(s.bleeding), g.position, g.normal, f.direct, rawOcclusion_,
+                        rawIrradiance_);
+  f.ctx.launch(occlusionKernel_, pixelGroups(f.ctx.vectorWidth(), gw, gh), "ssao: occlusion");
 }
 
 void SsaoTechnique::blurComposePass(const FrameResources& f, const SsaoSettings& s, bool upstream,
                                     cl::Buffer& indirect) {
   const GBuffer& g = f.gbuffer;
-  blurKernel_.args(g.width, g.height, g.visibility.depth, g.albedo, rawOcclusion_, rawIrradiance_, s.blurTau,
-                   int(upstream), int(s.bleeding), occlusion_, indirect);
-  f.ctx.launch(blurKernel_, pixelGroups(f.ctx.vectorWidth(), g), "ssao: blur + compose");
+  if (programDownsample_ == 1) {
+    blurKernel_.args(g.width, g.height, g.visibility.depth, g.albedo, rawOcclusion_, rawIrradiance_, s.blurTau,
+                     int(upstream), int(s.bleeding), occlusion_, indirect);
+    f.ctx.launch(blurKernel_, pixelGroups(f.ctx.vectorWidth(), g.width, g.height), "ssao: blur + compose");
+  } else {
+    const int gw = (g.width + 1) / 2, gh = (g.height + 1) / 2;
+    blurKernel_.args(g.width, g.height, gw, gh, g.visibility.depth, g.albedo, records_, rawOcclusion_,
+                     rawIrradiance_, s.blurTau, int(upstream), int(s.bleeding), occlusion_, indirect);
+    f.ctx.launch(blurKernel_, pixelGroups(f.ctx.vectorWidth(), g.width, g.height),
+                 "ssao: upsample, blur + compose");
+  }
 }
 
 void SsaoTechnique::render(const FrameResources& f, cl::Buffer& indirect) {
@@ -137,6 +158,8 @@ TechniqueInfo ssaoTechniqueInfo() {
                        "a sample is occluded only this far (metres) behind the visible surface; 0 = 1 % of R");
             p.addFloat("ssao.blur_tau", 0.05, 0.0, 10.0,
                        "4x4 blur: neighbours whose view depth differs by more than this fraction are skipped");
+            p.addInt("ssao.downsample", 1, 1, 2,
+                     "1: occlusion per pixel; 2: on a half-resolution grid, then a depth-aware 4x4 blur per pixel");
             p.addChoice("ssao.bleeding", "auto", {"auto", "on", "off"},
                         "screen-space one-bounce colour bleeding (eq. 3.5); auto = on only when ssao is first in "
                         "the technique chain");

@@ -23,6 +23,9 @@ struct SsaoSettings {
   float bias = 0.0f;    // metres
   float blurTau = 0.05f;
   bool bleeding = false;
+  // 1: occlusion (and bleeding) per camera pixel; 2: per pixel of a half-resolution grid (camera
+  // pixels (2u, 2v)), then blurred per camera pixel over the grid, depth-aware.
+  int downsample = 1;
 };
 
 // The hemisphere kernel: `samples` tangent-space vectors (x, y, z along the normal, w = 0) with
@@ -50,7 +53,8 @@ public:
   void blurComposePass(const FrameResources& frame, const SsaoSettings& s, bool upstreamIndirect,
                        cl::Buffer& indirect);
 
-  // float per pixel (occluded fraction), float4 per pixel (irradiance E, W/m²); blurred occlusion.
+  // float per grid pixel (occluded fraction), float4 per grid pixel (irradiance E, W/m²) — the grid
+  // is the camera image unless downsample = 2; blurred occlusion per camera pixel.
   cl::Buffer& rawOcclusion() { return rawOcclusion_; }
   cl::Buffer& rawIrradiance() { return rawIrradiance_; }
   const cl::Buffer& occlusion() const { return occlusion_; }
@@ -59,7 +63,8 @@ private:
   cl::Program program_;
   cl::Kernel occlusionKernel_, blurKernel_, planesKernel_;
   cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_, records_;
-  int programSamples_ = 0;
+  cl::Buffer gridDepth_, gridNormal_;  // downsample = 2: the grid pixels' depth and geometric normal
+  int programSamples_ = 0, programDownsample_ = 0;
 };
 
 }  // namespace gi
