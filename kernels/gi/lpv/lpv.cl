@@ -374,9 +374,11 @@ inline void lpv_transmittance(int dir, const floatL* g, floatL mainMax, floatL s
 // Adds the light channel `in` (4 coefficient planes) of the neighbour in direction `dir` sends
 // through the destination's 5 faces: face fluxes T_f · max(0, I(ω_f)) into o[0] (sum of the
 // fluxes) and o[1..3] (signed along the re-emission axis), scaled by the lobe constants at the end.
-// Fused multiply-adds; the direction's 5 fluxes are summed first and added to o[0] once, so that
-// o[0] is not one chain of 30 dependent adds per channel.
-inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
+// With blocking the 30 factors live in memory (they do not fit in registers) and each is read
+// once, as the operand of one multiply; without, they are two constants in registers and the
+// fluxes go into the sums by fused multiply-adds. Either way the direction's 5 fluxes are summed
+// first and added to o[0] once, so that o[0] is not one chain of 30 dependent adds per channel.
+inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, const bool blocking) {
   int a = dir / 2;
   float s = dir % 2 ? -1.0f : 1.0f;
   int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
@@ -386,11 +388,22 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
   floatL r1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b1)], r2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b2)];
   floatL f1p = fmax(side + r1, 0.0f), f1m = fmax(side - r1, 0.0f);
   floatL f2p = fmax(side + r2, 0.0f), f2m = fmax(side - r2, 0.0f);
-  floatL sum = fma(f2m, t[4], fma(f2p, t[3], fma(f1m, t[2], fma(f1p, t[1], fMain * t[0]))));
-  o[0] += sum;
-  o[LPV_COEF(a)] = fma(s > 0.0f ? fMain : -fMain, t[0], o[LPV_COEF(a)]);
-  o[LPV_COEF(b1)] = fma(-f1m, t[2], fma(f1p, t[1], o[LPV_COEF(b1)]));
-  o[LPV_COEF(b2)] = fma(-f2m, t[4], fma(f2p, t[3], o[LPV_COEF(b2)]));
+  if (blocking) {
+    fMain *= t[0];
+    f1p *= t[1];
+    f1m *= t[2];
+    f2p *= t[3];
+    f2m *= t[4];
+    o[0] += (fMain + f1p) + (f1m + f2p) + f2m;
+    o[LPV_COEF(a)] += s > 0.0f ? fMain : -fMain;
+    o[LPV_COEF(b1)] += f1p - f1m;
+    o[LPV_COEF(b2)] += f2p - f2m;
+  } else {
+    o[0] += fma(f2m, t[4], fma(f2p, t[3], fma(f1m, t[2], fma(f1p, t[1], fMain * t[0]))));
+    o[LPV_COEF(a)] = fma(s > 0.0f ? fMain : -fMain, t[0], o[LPV_COEF(a)]);
+    o[LPV_COEF(b1)] = fma(-f1m, t[2], fma(f1p, t[1], o[LPV_COEF(b1)]));
+    o[LPV_COEF(b2)] = fma(-f2m, t[4], fma(f2p, t[3], o[LPV_COEF(b2)]));
+  }
 }
 
 // One gather step of cascade k. Work-item = LPV_LANES destination cells of a row (global
@@ -401,8 +414,14 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
 // unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them — or
 // occlusion off) without loading or computing any factor; the blocking is a compile-time constant
 // in each, so neither carries the other's work.
+// The accumulated grid is updated every other step (half its memory traffic): `accumulate` =
+// LPV_ACCUMULATE_NONE leaves it for the next step, LPV_ACCUMULATE_BOTH adds the source grid (the
+// previous step's result) and this step's, LPV_ACCUMULATE_THIS this step's alone (lpv_volume.cpp).
+#define LPV_ACCUMULATE_NONE 0
+#define LPV_ACCUMULATE_THIS 1
+#define LPV_ACCUMULATE_BOTH 2
 inline void lpv_propagate_step(global const float* src, global float* dst, global float* accumulated,
-                               global const float* faceGeometry, int k, const bool blocking) {
+                               global const float* faceGeometry, int k, int accumulate, const bool blocking) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2);
   size_t row = LPV_PAD + LPV_AT(k, 0, x0, y, z);  // plane 0 of the work-item's first cell
   intL x = x0 + LPV_LANE_IDS;
@@ -446,7 +465,7 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
       floatL in[4];
 #pragma unroll
       for (int q = 0; q < 4; ++q) in[q] = vloadL(0, src + planes + q * LPV_N + nb);
-      lpv_faces(dir, in, t[dir], o);
+      lpv_faces(dir, in, t[dir], o, blocking);
     }
     const float lobe[4] = {GI_SH_LOBE0, GI_SH_LOBE1, GI_SH_LOBE1, GI_SH_LOBE1};
 #pragma unroll
@@ -454,18 +473,22 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
       size_t at = planes + q * LPV_N;
       floatL out = lobe[q] * o[q];
       vstoreL(out, 0, dst + at);
-      vstoreL(vloadL(0, accumulated + at) + out, 0, accumulated + at);
+      if (accumulate != LPV_ACCUMULATE_NONE) {
+        floatL sum = accumulate == LPV_ACCUMULATE_BOTH ? vloadL(0, src + at) + out : out;
+        vstoreL(vloadL(0, accumulated + at) + sum, 0, accumulated + at);
+      }
     }
   }
 }
 
 kernel void lpv_propagate_blocked(global const float* src, global float* dst, global float* accumulated,
-                                  global const float* faceGeometry, int k) {
-  lpv_propagate_step(src, dst, accumulated, faceGeometry, k, true);
+                                  global const float* faceGeometry, int k, int accumulate) {
+  lpv_propagate_step(src, dst, accumulated, faceGeometry, k, accumulate, true);
 }
 
-kernel void lpv_propagate_open(global const float* src, global float* dst, global float* accumulated, int k) {
-  lpv_propagate_step(src, dst, accumulated, 0, k, false);
+kernel void lpv_propagate_open(global const float* src, global float* dst, global float* accumulated, int k,
+                               int accumulate) {
+  lpv_propagate_step(src, dst, accumulated, 0, k, accumulate, false);
 }
 
 // ---- lookup ----------------------------------------------------------------------------------

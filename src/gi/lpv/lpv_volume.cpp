@@ -251,16 +251,21 @@ void LpvVolume::propagate(int iterations, bool blocking) {
   // (two grids, the accumulated grid, the face potentials), which the last-level cache holds for
   // one cascade but not for three (all cascades in one launch per step: 0.92 instead of 0.50–0.58 ms
   // per step and cascade on the idle machine). The cascades do not interact.
+  // The accumulated grid already holds the source grid of the first step; each step's result is
+  // added to it by the next step together with that step's own (lpv.cl LPV_ACCUMULATE_*), or by
+  // the step itself when it is the last.
+  enum Accumulate { kNone = 0, kThis = 1, kBoth = 2 };
   int start = current_;
   for (int k = 0; k < cascades_; ++k) {
     current_ = start;
     for (int i = 0; i < iterations; ++i) {
+      int accumulate = i % 2 ? kBoth : i + 1 == iterations ? kThis : kNone;
       // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
       if (blocking && i > 0) {
-        propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k);
+        propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k, accumulate);
         ctx_.launch(propagateBlocked_, propagateRange_, "lpv: propagate");
       } else {
-        propagateOpen_.args(grids_[current_], grids_[1 - current_], accumulated_, k);
+        propagateOpen_.args(grids_[current_], grids_[1 - current_], accumulated_, k, accumulate);
         ctx_.launch(propagateOpen_, propagateRange_, "lpv: propagate");
       }
       current_ = 1 - current_;
