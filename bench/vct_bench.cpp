@@ -4,13 +4,16 @@
 // Cornell box. Not a test: the machine is noisy; docs/PERFORMANCE.md records the numbers.
 //
 //   build/vct_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 5] [--quick]
-//                   [--only voxelize]
+//                   [--only voxelize|cones]
 // --quick: only the default configuration and the targets (128³).
 // --only voxelize: only the voxelization passes at 128³ (clear, voxelize, occupied list), repeated
 //   `frames` times without rendering; prints the minimum beside the median (on a shared machine the
 //   minimum is the better estimate of the unloaded time).
+// --only cones: only the two isotropic 128³ configurations (diffuse cones at full and at half
+//   resolution, specular cone), for A/B timing of the cone marches.
 #include <algorithm>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -64,7 +67,9 @@ int main(int argc, char** argv) {
         {{"vct.resolution=128", "vct.mips=isotropic", "vct.downsample=2"}, "128^3 isotropic, 6 cones at half resolution + upsampling"},
         {{"vct.resolution=128", "vct.mips=anisotropic", "vct.downsample=2"}, "128^3 anisotropic, half resolution"},
     };
-    if (!quick) {
+    if (args.only == "cones") configs = {configs[0], configs[2]};
+    else if (!args.only.empty()) throw std::runtime_error("--only: expected voxelize or cones, got '" + args.only + "'");
+    if (!quick && args.only.empty()) {
       configs.push_back({{"vct.resolution=128", "vct.mips=isotropic", "vct.cones=9"}, "128^3 isotropic, 9 cones (ten Brug)"});
       configs.push_back({{"vct.resolution=128", "vct.bounces=2"}, "128^3 anisotropic, second bounce"});
       configs.push_back({{"vct.resolution=128", "vct.mips=isotropic", "vct.voxels=sh", "vct.downsample=2"},

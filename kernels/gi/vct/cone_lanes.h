@@ -36,67 +36,174 @@ inline VoxelMipsV vox_mips_lanes(VoxelMips m) {
   return r;
 }
 
-// acc += weight × the trilinear lookup at p of the volume of n³ voxels (scale = n / N) starting at
-// voxel `base` (all per lane) of `vol` (radiance, α) or, with SH voxels, of `shVol` evaluated against basis
-// (Y0, Y1y, Y1z, Y1x) with α from `vol` (vox_trilinear / vox_trilinear_sh).
-inline void vox_trilinear_lanes(global const float* vol, global const float* shVol, intV base, intV n, float3V p,
+// The two x-adjacent records at element offsets i (per lane) of p (records of 4 floats) as eight
+// planes R0, G0, B0, A0, R1, G1, B1, A1: one 32-byte load per lane and an 8×8 transposition in the
+// three shuffle stages of AVX (unpack within 128-bit halves, pairs of pairs, halves), written so
+// that each loaded vector is consumed whole (picking single elements out of the loads made the
+// compiler split them into 8-byte loads and element inserts).
+#if GI_VW >= 8
+__attribute__((always_inline)) inline void vct_pair_planes8(global const float* p, int8 i, float8 out[8]) {
+  float8 L0 = vload8(0, p + i.s0), L1 = vload8(0, p + i.s1), L2 = vload8(0, p + i.s2), L3 = vload8(0, p + i.s3);
+  float8 L4 = vload8(0, p + i.s4), L5 = vload8(0, p + i.s5), L6 = vload8(0, p + i.s6), L7 = vload8(0, p + i.s7);
+  float8 t0 = (float8)(L0.s0, L1.s0, L0.s1, L1.s1, L0.s4, L1.s4, L0.s5, L1.s5);
+  float8 t1 = (float8)(L0.s2, L1.s2, L0.s3, L1.s3, L0.s6, L1.s6, L0.s7, L1.s7);
+  float8 t2 = (float8)(L2.s0, L3.s0, L2.s1, L3.s1, L2.s4, L3.s4, L2.s5, L3.s5);
+  float8 t3 = (float8)(L2.s2, L3.s2, L2.s3, L3.s3, L2.s6, L3.s6, L2.s7, L3.s7);
+  float8 t4 = (float8)(L4.s0, L5.s0, L4.s1, L5.s1, L4.s4, L5.s4, L4.s5, L5.s5);
+  float8 t5 = (float8)(L4.s2, L5.s2, L4.s3, L5.s3, L4.s6, L5.s6, L4.s7, L5.s7);
+  float8 t6 = (float8)(L6.s0, L7.s0, L6.s1, L7.s1, L6.s4, L7.s4, L6.s5, L7.s5);
+  float8 t7 = (float8)(L6.s2, L7.s2, L6.s3, L7.s3, L6.s6, L7.s6, L6.s7, L7.s7);
+  // u0..u3: R, G, B, A of lanes 0-3 (first record | second record); u4..u7: lanes 4-7.
+  float8 u0 = (float8)(t0.s01, t2.s01, t0.s45, t2.s45), u1 = (float8)(t0.s23, t2.s23, t0.s67, t2.s67);
+  float8 u2 = (float8)(t1.s01, t3.s01, t1.s45, t3.s45), u3 = (float8)(t1.s23, t3.s23, t1.s67, t3.s67);
+  float8 u4 = (float8)(t4.s01, t6.s01, t4.s45, t6.s45), u5 = (float8)(t4.s23, t6.s23, t4.s67, t6.s67);
+  float8 u6 = (float8)(t5.s01, t7.s01, t5.s45, t7.s45), u7 = (float8)(t5.s23, t7.s23, t5.s67, t7.s67);
+  out[0] = (float8)(u0.lo, u4.lo);
+  out[1] = (float8)(u1.lo, u5.lo);
+  out[2] = (float8)(u2.lo, u6.lo);
+  out[3] = (float8)(u3.lo, u7.lo);
+  out[4] = (float8)(u0.hi, u4.hi);
+  out[5] = (float8)(u1.hi, u5.hi);
+  out[6] = (float8)(u2.hi, u6.hi);
+  out[7] = (float8)(u3.hi, u7.hi);
+}
+#endif
+#if GI_VW == 16
+#define VCT_GATHER_PAIR(p, i, R0, G0, B0, A0, R1, G1, B1, A1) \
+  {                                                          \
+    float8 lo_[8], hi_[8];                                   \
+    vct_pair_planes8(p, (i).lo, lo_);                        \
+    vct_pair_planes8(p, (i).hi, hi_);                        \
+    R0 = (float16)(lo_[0], hi_[0]);                          \
+    G0 = (float16)(lo_[1], hi_[1]);                          \
+    B0 = (float16)(lo_[2], hi_[2]);                          \
+    A0 = (float16)(lo_[3], hi_[3]);                          \
+    R1 = (float16)(lo_[4], hi_[4]);                          \
+    G1 = (float16)(lo_[5], hi_[5]);                          \
+    B1 = (float16)(lo_[6], hi_[6]);                          \
+    A1 = (float16)(lo_[7], hi_[7]);                          \
+  }
+#elif GI_VW == 8
+#define VCT_GATHER_PAIR(p, i, R0, G0, B0, A0, R1, G1, B1, A1) \
+  {                                                          \
+    float8 t_[8];                                            \
+    vct_pair_planes8(p, i, t_);                              \
+    R0 = t_[0];                                              \
+    G0 = t_[1];                                              \
+    B0 = t_[2];                                              \
+    A0 = t_[3];                                              \
+    R1 = t_[4];                                              \
+    G1 = t_[5];                                              \
+    B1 = t_[6];                                              \
+    A1 = t_[7];                                              \
+  }
+#elif GI_VW == 1
+#define VCT_GATHER_PAIR(p, i, R0, G0, B0, A0, R1, G1, B1, A1) \
+  {                                                          \
+    float8 a_ = vload8(0, (p) + (i));                        \
+    R0 = a_.s0;                                              \
+    G0 = a_.s1;                                              \
+    B0 = a_.s2;                                              \
+    A0 = a_.s3;                                              \
+    R1 = a_.s4;                                              \
+    G1 = a_.s5;                                              \
+    B1 = a_.s6;                                              \
+    A1 = a_.s7;                                              \
+  }
+#endif
+
+// acc += weight × the trilinear lookup at p of the volume of n³ voxels, n = 2^shift (scale = n / N),
+// starting at voxel `base` (all per lane) of `vol` (radiance, α) or, with SH voxels, of `shVol`
+// evaluated against basis (Y0, Y1y, Y1z, Y1x) with α from `vol` (vox_trilinear / vox_trilinear_sh).
+// Same taps, weights and order of summation as vox_trilinear; the tap pair along x of each (y, z)
+// row is read as one pair of adjacent records starting at xs = clamp(ix, 0, n − 2), each tap's weight
+// moved to its place in the pair (a tap outside the volume weighs 0, and so does the pair's other
+// record). Rows outside the volume are clamped into it and weigh 0. A 1-voxel volume's pair
+// reaches one record past it: the chains end with one zero record (VoxelScene).
+__attribute__((always_inline)) inline void vox_trilinear_lanes(global const float* vol, global const float* shVol, intV base, intV shift, float3V p,
                                 floatV scale, floatV weight, floatV Y0, floatV Y1y, floatV Y1z, floatV Y1x, RgbaV* acc) {
+  intV n = (intV)(1) << shift;
   floatV ux = p.x * scale - 0.5f, uy = p.y * scale - 0.5f, uz = p.z * scale - 0.5f;
   floatV flx = floor(ux), fly = floor(uy), flz = floor(uz);
   floatV fx = ux - flx, fy = uy - fly, fz = uz - flz;
   intV ix = convert_intV(flx), iy = convert_intV(fly), iz = convert_intV(flz);
-  for (int k = 0; k < 8; ++k) {
-    intV x = ix + (k & 1), y = iy + ((k >> 1) & 1), z = iz + (k >> 2);
-    intV inside = x >= 0 && x < n && y >= 0 && y < n && z >= 0 && z < n;
-    floatV w = ((k & 1) ? fx : 1.0f - fx) * (((k >> 1) & 1) ? fy : 1.0f - fy) * ((k >> 2) ? fz : 1.0f - fz);
-    w = GI_SEL((floatV)(0.0f), w * weight, inside);
-    intV idx = base + GI_SEL((intV)(0), (z * n + y) * n + x, inside);
+  floatV zero = (floatV)(0.0f);
+  // Per axis, the weights of taps i and i + 1 (0 outside the volume).
+  floatV wx0 = GI_SEL(zero, 1.0f - fx, ix >= 0 && ix < n), wx1 = GI_SEL(zero, fx, ix >= -1 && ix < n - 1);
+  floatV wy[2] = {GI_SEL(zero, 1.0f - fy, iy >= 0 && iy < n), GI_SEL(zero, fy, iy >= -1 && iy < n - 1)};
+  floatV wz[2] = {GI_SEL(zero, 1.0f - fz, iz >= 0 && iz < n), GI_SEL(zero, fz, iz >= -1 && iz < n - 1)};
+  intV yr[2] = {min(max(iy, 0), n - 1), min(max(iy + 1, 0), n - 1)};
+  intV zr[2] = {min(max(iz, 0), n - 1), min(max(iz + 1, 0), n - 1)};
+  intV xs = max(min(ix, n - 2), 0);
+  intV below = ix < xs, above = ix > xs;
+  floatV wFirst = GI_SEL(GI_SEL(wx0, zero, above), wx1, below);
+  floatV wSecond = GI_SEL(GI_SEL(wx1, wx0, above), zero, below);
+#pragma unroll
+  for (int row = 0; row < 4; ++row) {
+    int yb = row & 1, zb = row >> 1;
+    intV idx = base + ((((zr[zb] << shift) + yr[yb]) << shift) + xs);
+    floatV w0 = wFirst * wy[yb] * wz[zb] * weight, w1 = wSecond * wy[yb] * wz[zb] * weight;
 #if GI_VCT_SH
     floatV r0, r1, r2, r3, g0, g1, g2, g3, b0, b1, b2, b3;
     GI_GATHER_SPAN4(float, shVol, idx * 12, r0, r1, r2, r3)
     GI_GATHER_SPAN4(float, shVol, idx * 12 + 4, g0, g1, g2, g3)
     GI_GATHER_SPAN4(float, shVol, idx * 12 + 8, b0, b1, b2, b3)
-    acc->r += w * (r0 * Y0 + r1 * Y1y + r2 * Y1z + r3 * Y1x);
-    acc->g += w * (g0 * Y0 + g1 * Y1y + g2 * Y1z + g3 * Y1x);
-    acc->b += w * (b0 * Y0 + b1 * Y1y + b2 * Y1z + b3 * Y1x);
-    acc->a += w * GI_GATHER(floatV, vol + 3, idx * 4);
+    acc->r += w0 * (r0 * Y0 + r1 * Y1y + r2 * Y1z + r3 * Y1x);
+    acc->g += w0 * (g0 * Y0 + g1 * Y1y + g2 * Y1z + g3 * Y1x);
+    acc->b += w0 * (b0 * Y0 + b1 * Y1y + b2 * Y1z + b3 * Y1x);
+    GI_GATHER_SPAN4(float, shVol, idx * 12 + 12, r0, r1, r2, r3)
+    GI_GATHER_SPAN4(float, shVol, idx * 12 + 16, g0, g1, g2, g3)
+    GI_GATHER_SPAN4(float, shVol, idx * 12 + 20, b0, b1, b2, b3)
+    acc->r += w1 * (r0 * Y0 + r1 * Y1y + r2 * Y1z + r3 * Y1x);
+    acc->g += w1 * (g0 * Y0 + g1 * Y1y + g2 * Y1z + g3 * Y1x);
+    acc->b += w1 * (b0 * Y0 + b1 * Y1y + b2 * Y1z + b3 * Y1x);
+    floatV unused0, unused1, unused2, a0, unused3, unused4, unused5, a1;
+    VCT_GATHER_PAIR(vol, idx * 4, unused0, unused1, unused2, a0, unused3, unused4, unused5, a1)
+    acc->a += w0 * a0;
+    acc->a += w1 * a1;
 #else
-    floatV r, g, b, a;
-    GI_GATHER_AOS4(float, vol, idx, r, g, b, a)
-    acc->r += w * r;
-    acc->g += w * g;
-    acc->b += w * b;
-    acc->a += w * a;
+    floatV r0, g0, b0, a0, r1, g1, b1, a1;
+    VCT_GATHER_PAIR(vol, idx * 4, r0, g0, b0, a0, r1, g1, b1, a1)
+    acc->r += w0 * r0;
+    acc->g += w0 * g0;
+    acc->b += w0 * b0;
+    acc->a += w0 * a0;
+    acc->r += w1 * r1;
+    acc->g += w1 * g1;
+    acc->b += w1 * b1;
+    acc->a += w1 * a1;
 #endif
   }
 }
 
 // acc += weight × level `level` (per lane) seen along d (vox_level_sample). Level offsets in closed
-// form: Σ_{l<L} (N >> l)³ = 8·(N³ − n³)/7 with n = N >> L.
+// form: Σ_{l<L} (N >> l)³ = 8·n³·(8^L − 1)/7 with n = N >> L, and (8^L − 1)/7 = octal 1…1 (L ones).
 inline void vox_level_sample_lanes(VoxelMipsV m, intV level, float3V p, float3V d, floatV weight, RgbaV* acc) {
-  intV n = (intV)(m.N) >> level;
-  floatV scale = convert_floatV(n) * (1.0f / (float)m.N);
+  int logN = 31 - clz(m.N);
+  intV shift = logN - level;
+  floatV scale = as_floatV(convert_uintV(127 - level) << 23);  // 2^−level
+  intV n3Shift = 3 * shift;
+  intV offset = ((intV)(0x09249249) & (((intV)(1) << (3 * level)) - 1)) << (n3Shift + 3);
   int N3 = m.N * m.N * m.N;
-  intV n3 = n * n * n;
-  intV offset = 8 * (N3 - n3) / 7;
+  intV n3 = (intV)(1) << n3Shift;
   // Light arriving at the apex travels along −d: the SH basis at −d.
   floatV Y0 = (floatV)(GI_SH_Y0), Y1y = -GI_SH_Y1 * d.y, Y1z = -GI_SH_Y1 * d.z, Y1x = -GI_SH_Y1 * d.x;
   intV isoLanes = level == 0;
   if (!m.anisotropic) isoLanes = (intV)(-1);
-  // Lanes masked out of a volume (weight 0) read its first voxel only (n = 1, base 0): the
+  // Lanes masked out of a volume (weight 0) read its first voxels only (n = 1, base 0): the
   // isotropic levels ≥ 1 are not built with anisotropic mips, and level 0 has no directional
   // volumes; unwritten memory could hold NaN, and NaN·0 is NaN.
   if (GI_ANY(isoLanes))
-    vox_trilinear_lanes(m.iso, m.sh, GI_SEL((intV)(0), offset, isoLanes), GI_SEL((intV)(1), n, isoLanes), p, scale,
+    vox_trilinear_lanes(m.iso, m.sh, GI_SEL((intV)(0), offset, isoLanes), GI_SEL((intV)(0), shift, isoLanes), p, scale,
                         GI_SEL((floatV)(0.0f), weight, isoLanes), Y0, Y1y, Y1z, Y1x, acc);
   if (!m.anisotropic || GI_ALL(isoLanes)) return;
   floatV da[3] = {d.x, d.y, d.z};
-  intV nDirectional = GI_SEL(n, (intV)(1), isoLanes);
+  intV shiftDirectional = GI_SEL(shift, (intV)(0), isoLanes);
   for (int axis = 0; axis < 3; ++axis) {
     // Directional volume 2·axis (+) or 2·axis + 1 (−) of the level (vox_aniso_offset).
     intV dir = 2 * axis + GI_SEL((intV)(1), (intV)(0), da[axis] >= 0.0f);
     intV base = 6 * (offset - N3) + dir * n3;
-    vox_trilinear_lanes(m.aniso, m.shAniso, GI_SEL(base, (intV)(0), isoLanes), nDirectional, p, scale,
+    vox_trilinear_lanes(m.aniso, m.shAniso, GI_SEL(base, (intV)(0), isoLanes), shiftDirectional, p, scale,
                         GI_SEL(weight * da[axis] * da[axis], (floatV)(0.0f), isoLanes), Y0, Y1y, Y1z, Y1x, acc);
   }
 }

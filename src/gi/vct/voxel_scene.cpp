@@ -49,7 +49,7 @@ uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic, bool sh) {
 uint64_t VoxelScene::anisoBytes() const {
   uint64_t bytes = 0;
   for (int l = 1; l < grid_.levels; ++l) bytes += 6 * (voxelCount() >> (3 * l)) * 16;
-  return bytes;
+  return bytes + kChainEndRecords * 16;
 }
 
 VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
@@ -73,6 +73,7 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   uint64_t n = voxelCount();
   uint64_t chain = 0;
   for (int l = 0; l < grid_.levels; ++l) chain += (n >> (3 * l));
+  chain += kChainEndRecords;
   ctx.requireAllocation(n * GI_VOX_RECORD * 4, "vct voxelization accumulators (vct.resolution)");
   ctx.requireAllocation(chain * 16, "vct radiance mips (vct.resolution)");
   acc_ = cl::Buffer(ctx, n * GI_VOX_RECORD * 4, CL_MEM_READ_WRITE, "vct voxelization accumulators");
@@ -120,6 +121,7 @@ void VoxelScene::buildMips(bool anisotropic) {
   if (anisotropic && !aniso_) {
     ctx_.requireAllocation(anisoBytes(), "vct anisotropic mips (vct.resolution)");
     aniso_ = cl::Buffer(ctx_, anisoBytes(), CL_MEM_READ_WRITE, "vct anisotropic mips");
+    ctx_.fill(aniso_, 0.0f);  // the end record stays 0
   }
   for (int l = 1; l < grid_.levels; ++l) {
     size_t cells = voxelCount() >> (3 * l);
@@ -146,6 +148,7 @@ void VoxelScene::projectSh(ShLobe lobe) {
     uint64_t bytes = 3 * iso_.bytes();
     ctx_.requireAllocation(bytes, "vct SH voxels (vct.voxels=sh, vct.resolution)");
     sh_ = cl::Buffer(ctx_, bytes, CL_MEM_READ_WRITE, "vct SH voxels");
+    ctx_.fill(sh_, 0.0f);  // the end records stay 0
   }
   cl_float2 k = lobe == ShLobe::Hemisphere ? cl_float2{{GI_VCT_SH_HEMISPHERE0, GI_VCT_SH_HEMISPHERE1}}
                                            : cl_float2{{GI_VCT_SH_COSINE0, GI_VCT_SH_COSINE1}};
@@ -159,6 +162,7 @@ void VoxelScene::buildShMips(bool anisotropic) {
   if (anisotropic && !shAniso_) {
     ctx_.requireAllocation(3 * anisoBytes(), "vct anisotropic SH voxels (vct.voxels=sh, vct.resolution)");
     shAniso_ = cl::Buffer(ctx_, 3 * anisoBytes(), CL_MEM_READ_WRITE, "vct anisotropic SH voxels");
+    ctx_.fill(shAniso_, 0.0f);  // the end records stay 0
   }
   for (int l = 1; l < grid_.levels; ++l) {
     size_t cells = voxelCount() >> (3 * l);

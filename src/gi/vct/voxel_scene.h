@@ -61,6 +61,11 @@ public:
   // (+ SH coefficients of the chains used).
   static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false);
 
+  // Every chain (iso_, aniso_ and their SH copies) ends with this many zero records: the cone march
+  // reads the tap pair along x as two adjacent records, which for the last (1-voxel) volume reaches
+  // one record past the chain (kernels/gi/vct/cone_lanes.h, vox_trilinear_lanes; weight 0).
+  static constexpr uint64_t kChainEndRecords = 1;
+
 private:
   cl::Context& ctx_;
   GiVoxelGrid grid_{};
@@ -73,7 +78,8 @@ private:
   uint32_t occupancySpans() const;
   cl::Buffer instanceEmits_, acc_, occupied_, occupiedCount_, occupancy_, spanCounts_, iso_, aniso_, sh_, shAniso_;
 
-  uint64_t anisoBytes() const;  // the 6 directional volumes of levels ≥ 1, float4 each
+  // The 6 directional volumes of levels ≥ 1, float4 each, and the chain's zero end record.
+  uint64_t anisoBytes() const;
 };
 
 }  // namespace gi
