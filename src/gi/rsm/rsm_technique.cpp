@@ -1,6 +1,7 @@
 // `rsm`: RSM gather (Dachsbacher & Stamminger 2005; ALGORITHMS.md §2.1) at reduced resolution
 // with geometry-aware upsampling (§3). docs/techniques/rsm.md.
 #include <cmath>
+#include <cstring>
 #include <memory>
 
 #include "cl/gather_width.h"
@@ -28,8 +29,11 @@ public:
     float radius = p.getFloat("rsm.radius");
     bool xi2 = p.getChoice("rsm.weights") == "xi2";
     if (down != down_) {
-      program_ = f.ctx.buildProgram("kernels/gi/rsm/rsm_gather.cl", cl::withGatherWidth(f.ctx, {{"GI_DOWN", std::to_string(down)}, {"GI_RSM_ROWS", std::to_string(kRowsPerItem)}}));
-      kernel_ = program_.kernel("rsm_gather");
+      cl::Defines defs = cl::withGatherWidth(f.ctx, {{"GI_DOWN", std::to_string(down)}, {"GI_RSM_ROWS", std::to_string(kRowsPerItem)}});
+      program_ = f.ctx.buildProgram("kernels/gi/rsm/rsm_gather.cl", defs);
+      pack_ = program_.kernel("rsm_pack");
+      gatherOrtho_ = program_.kernel("rsm_gather_ortho");
+      gatherPerspective_ = program_.kernel("rsm_gather_perspective");
       down_ = down;
     }
     const GBuffer& g = f.gbuffer;
@@ -60,10 +64,24 @@ public:
     int vw = cl::gatherVectorWidth(f.ctx);
     for (size_t l = 0; l < f.rsms.size(); ++l) {
       const ReflectiveShadowMap& r = f.rsms[l];
-      kernel_.args(g.width, g.height, lw, lh, g.position, g.normal, r.view, r.position, r.normal, r.flux, samples,
-                   offsets_, weights_, p.getFloat("rsm.d_min"), int(l > 0), low_);
       size_t gx = (size_t(lw) + vw - 1) / vw, gy = (size_t(lh) + kRowsPerItem - 1) / kRowsPerItem;
-      f.ctx.launch(kernel_, cl::NDRange::d2(cl::roundUp(gx, 4), cl::roundUp(gy, 4), 4, 4), "rsm: gather");
+      // The RSM as 16-byte records with a one-texel border (kernels/gi/rsm/rsm_gather.cl).
+      size_t res = size_t(r.view.width), pitch = res + 2;
+      if (!records_ || records_.bytes() != pitch * pitch * 16) {
+        records_ = cl::Buffer(f.ctx, pitch * pitch * 16, CL_MEM_READ_WRITE, "rsm packed records");
+        // The border keeps these (depth 1, zero flux and normal); rsm_pack writes the interior.
+        const float one = 1.0f;
+        uint32_t border[4] = {0, 0, 0, 0};
+        std::memcpy(&border[0], &one, 4);
+        f.ctx.fill(records_, border, sizeof(border));
+      }
+      pack_.args(r.view, r.position, r.normal, r.flux, records_);
+      const size_t lx = vw == 1 ? 16 : 1, ly = vw == 1 ? 16 : 8;
+      f.ctx.launch(pack_, cl::NDRange::d2(cl::roundUp((res + vw - 1) / vw, lx), cl::roundUp(res, ly), lx, ly), "rsm: pack");
+      cl::Kernel& gather = r.view.orthographic ? gatherOrtho_ : gatherPerspective_;
+      gather.args(g.width, g.height, lw, lh, g.position, g.normal, r.view, records_, samples, offsets_, weights_,
+                  p.getFloat("rsm.d_min"), int(l > 0), low_);
+      f.ctx.launch(gather, cl::NDRange::d2(cl::roundUp(gx, 4), cl::roundUp(gy, 4), 4, 4), "rsm: gather");
     }
     GeometryTest t;
     t.tauZ = p.getFloat("rsm.tau_z");
@@ -74,8 +92,8 @@ public:
 private:
   std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   cl::Program program_;
-  cl::Kernel kernel_;
-  cl::Buffer low_, offsets_, weights_;
+  cl::Kernel pack_, gatherOrtho_, gatherPerspective_;
+  cl::Buffer low_, offsets_, weights_, records_;
   int down_ = 0, samples_ = 0, res_ = 0;
   float radius_ = 0;
   bool xi2_ = false;
