@@ -106,11 +106,13 @@ inline floatV ssao_half_value(uintV h) {
 // grid pixel (u, v) standing for camera pixel (2u, 2v); the records are then per grid pixel (the
 // plane of the surface seen at that camera pixel, gradients still per camera pixel), and this pass
 // also copies the grid pixels' depth and geometric normal into gridDepth and gridNormal so that the
-// occlusion reads them contiguously. With GI_SSAO_DOWN = 1 the grid is the camera image and
-// gridDepth/gridNormal are not written.
+// occlusion reads them contiguously, and for the blur's contiguous row loads the plane as three
+// floats: 1/depth A and A·(g_x, g_y), in full precision (the records' gradients are half floats).
+// With GI_SSAO_DOWN = 1 the grid is the camera image and the grid* planes are not written.
 kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView camera, float4 projection,
                               global const float* depth, global const float4* geoNormal, global uint2* records,
-                              global float* gridDepth, global float4* gridNormal) {
+                              global float* gridDepth, global float4* gridNormal, global float* gridInvDepth,
+                              global float* gridSlopeX, global float* gridSlopeY) {
   int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
   if (px0 >= gridWidth || y >= gridHeight) return;
   int i0 = y * gridWidth + px0, valid = min(GI_VW, gridWidth - px0);
@@ -136,10 +138,17 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
   floatV nr = nx * rx + ny * ry + nz;
   nr = copysign(fmax(fabs(nr), 1e-12f), nr);  // a plane seen edge-on: clamped gradients
   floatV inr = 1.0f / nr;
-  uintV g = ssao_half_bits(nx * inr * (1.0f / fx)) | (ssao_half_bits(-ny * inr * (1.0f / fy)) << 16);
+  floatV gx = nx * inr * (1.0f / fx), gy = -ny * inr * (1.0f / fy);
+  uintV g = ssao_half_bits(gx) | (ssao_half_bits(gy) << 16);
   intV surface = isfinite(z);
   uintV w0 = GI_SEL((uintV)(0u), as_uintV(1.0f / z), surface), w1 = GI_SEL((uintV)(0u), g, surface);
   global uint* out = (global uint*)(records + i0);
+#if GI_SSAO_DOWN != 1
+  floatV A = as_floatV(w0), zero = (floatV)(0.0f);
+  ssao_store1(gridInvDepth, i0, valid, A);
+  ssao_store1(gridSlopeX, i0, valid, GI_SEL(zero, A * gx, surface));
+  ssao_store1(gridSlopeY, i0, valid, GI_SEL(zero, A * gy, surface));
+#endif
 #if GI_VW == 1
   vstore2((uint2)(w0, w1), 0, out);
 #else
@@ -278,6 +287,29 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
   SSAO_STORE4(irradianceOut, i0, valid, Ex, Ey, Ez, zero)
 }
 
+// The composition of GI_VW pixels from pixel i0 (valid of them in the image): stores the blurred
+// occlusion occ and indirect = (1 − occ)·indirect_upstream + albedo·k·E, k = the E normalisation
+// over π (0 off surfaces).
+inline void ssao_compose(int i0, int valid, floatV occ, floatV k, floatV Ex, floatV Ey, floatV Ez, int upstream,
+                         int bleeding, global const float4* albedo, global float* occlusionOut,
+                         global float4* indirect) {
+  float tmp[4 * GI_VW];
+  floatV zero = (floatV)(0.0f);
+  ssao_store1(occlusionOut, i0, valid, occ);
+  floatV ix = zero, iy = zero, iz = zero, iw = zero;
+  if (upstream) SSAO_LOAD4(indirect, i0, valid, ix, iy, iz, iw)
+  floatV keep = 1.0f - occ;
+  floatV ox = keep * ix, oy = keep * iy, oz = keep * iz;
+  if (bleeding) {
+    floatV ax, ay, az, aw;
+    SSAO_LOAD4(albedo, i0, valid, ax, ay, az, aw)
+    ox += ax * k * Ex;
+    oy += ay * k * Ey;
+    oz += az * k * Ez;
+  }
+  SSAO_STORE4(indirect, i0, valid, ox, oy, oz, iw)
+}
+
 // Depth-aware 4×4 blur of occlusion and E, then composition into the indirect buffer.
 // upstream = 0: no technique before this one in the chain (the indirect input counts as zero).
 // Rows of taps are contiguous vector loads inside the image; near the left and right borders the
@@ -336,21 +368,8 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
   // nothing and keep the upstream value.
   intV surface = isfinite(z);
   floatV inv = GI_SEL(zero, one / fmax(count, one), surface);
-  occ *= inv;
-  ssao_store1(occlusionOut, i0, valid, occ);
-  floatV ix = zero, iy = zero, iz = zero, iw = zero;
-  if (upstream) SSAO_LOAD4(indirect, i0, valid, ix, iy, iz, iw)
-  floatV keep = 1.0f - occ;
-  floatV ox = keep * ix, oy = keep * iy, oz = keep * iz;
-  if (bleeding) {
-    floatV ax, ay, az, aw;
-    SSAO_LOAD4(albedo, i0, valid, ax, ay, az, aw)
-    floatV k = GI_SEL(zero, GI_INV_PI * inv, surface);
-    ox += ax * k * Ex;
-    oy += ay * k * Ey;
-    oz += az * k * Ez;
-  }
-  SSAO_STORE4(indirect, i0, valid, ox, oy, oz, iw)
+  ssao_compose(i0, valid, occ * inv, GI_SEL(zero, GI_INV_PI * inv, surface), Ex, Ey, Ez, upstream, bleeding, albedo,
+               occlusionOut, indirect);
 }
 
 // ssao.downsample = 2: the blur of ssao_blur_compose over the half-resolution grid, evaluated per
@@ -362,133 +381,116 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
 // blur compares depths directly; over two camera pixels a plane seen at a grazing angle changes
 // its depth by more than tau, so the plane is extrapolated instead). A pixel with no grid pixel of
 // its surface in the window (a feature under two pixels wide) gets no occlusion and no bleeding.
-// Lanes: x0 is even; lane l's window starts at grid column c0 + ⌈l/2⌉, c0 = x0/2 − 2, so inside the
-// grid a row of the window is one vector load from c0 spread over the lanes by fixed swizzles, and
-// lane l lies 4 − 2i − (l & 1) camera pixels right of the centre of grid column c0 + ⌈l/2⌉ + i.
+// Lanes: a work-item takes the 2·GI_VW camera pixels from x0 (even) as two floatV, the even pixels
+// x0 + 2l and the odd pixels x0 + 2l + 1. Their windows start at grid columns c0 + l and c0 + l + 1
+// (c0 = x0/2 − 2), so inside the grid each row of windows is five contiguous loads (columns
+// c0 + k + l, k = 0..4: taps k of the even and k − 1 of the odd pixels) and no lane shuffles; the
+// pixels lie 4 − 2k (even) and 5 − 2k (odd) camera pixels right of the centre of grid column
+// c0 + k + l. The results are interleaved back into pixel order once, for the composition.
 #if GI_VW == 16
-#define SSAO_UP_TAP(v, i)                                                                                  \
-  ((i) == 0 ? (v).s0112233445566778 : (i) == 1 ? (v).s1223344556677889 : (i) == 2 ? (v).s233445566778899a \
-                                                                                  : (v).s3445566778899aab)
-// GI_VW consecutive depth-plane records -> their two words as lanes.
-#define SSAO_LOAD_RECORDS(p, W0, W1)                   \
-  {                                                    \
-    uint16 a_ = vload16(0, p), b_ = vload16(1, p);     \
-    W0 = (uint16)(a_.even, b_.even);                   \
-    W1 = (uint16)(a_.odd, b_.odd);                     \
-  }
+#define SSAO_EVEN(a, b) ((float16)((a).even, (b).even))
+#define SSAO_ODD(a, b) ((float16)((a).odd, (b).odd))
+#define SSAO_INTERLEAVE_LO(e, o) shuffle2(e, o, (uint16)(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23))
+#define SSAO_INTERLEAVE_HI(e, o) shuffle2(e, o, (uint16)(8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31))
 #elif GI_VW == 8
-#define SSAO_UP_TAP(v, i) \
-  ((i) == 0 ? (v).s01122334 : (i) == 1 ? (v).s12233445 : (i) == 2 ? (v).s23344556 : (v).s34455667)
-#define SSAO_LOAD_RECORDS(p, W0, W1) \
-  {                                  \
-    uint16 a_ = vload16(0, p);       \
-    W0 = a_.even;                    \
-    W1 = a_.odd;                     \
-  }
+#define SSAO_EVEN(a, b) ((float8)((a).even, (b).even))
+#define SSAO_ODD(a, b) ((float8)((a).odd, (b).odd))
+#define SSAO_INTERLEAVE_LO(e, o) shuffle2(e, o, (uint8)(0, 8, 1, 9, 2, 10, 3, 11))
+#define SSAO_INTERLEAVE_HI(e, o) shuffle2(e, o, (uint8)(4, 12, 5, 13, 6, 14, 7, 15))
+#else
+#define SSAO_EVEN(a, b) (a)
+#define SSAO_ODD(a, b) (b)
+#define SSAO_INTERLEAVE_LO(e, o) (e)
+#define SSAO_INTERLEAVE_HI(e, o) (o)
 #endif
+// One tap: accumulate grid pixel (plane P + Q·offsetX at the pixel, NaN where it is not usable;
+// occlusion oq, E) into a pixel of depth z when its plane passes within tau·z.
+#define SSAO_UP_TAP(z, offsetX, occ, count, Ex, Ey, Ez)                  \
+  {                                                                      \
+    floatV e_ = (z) * (P + Q * (offsetX)) - 1.0f;                        \
+    intV take_ = fabs(e_) <= tau;                                        \
+    occ += GI_SEL(zero, oq, take_);                                      \
+    count += GI_SEL(zero, one, take_);                                   \
+    if (bleeding) {                                                      \
+      Ex += GI_SEL(zero, ex, take_);                                     \
+      Ey += GI_SEL(zero, ey, take_);                                     \
+      Ez += GI_SEL(zero, ez, take_);                                     \
+    }                                                                    \
+  }
 kernel void ssao_upsample_blur_compose(int width, int height, int gridWidth, int gridHeight,
                                        global const float* depth, global const float4* albedo,
-                                       global const uint2* records, global const float* occlusionIn,
-                                       global const float4* irradianceIn, float tau, int upstream, int bleeding,
-                                       global float* occlusionOut, global float4* indirect) {
-  int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
-  if (px0 >= width || y >= height) return;
-  int i0 = y * width + px0, valid = min(GI_VW, width - px0);
-  float tmp[4 * GI_VW];
-  floatV z = ssao_load1(depth, i0, valid);
-  floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
-  floatV occ = zero, count = zero, Ex = zero, Ey = zero, Ez = zero;
+                                       global const float* gridInvDepth, global const float* gridSlopeX,
+                                       global const float* gridSlopeY,
+                                       global const float* occlusionIn, global const float4* irradianceIn, float tau,
+                                       int upstream, int bleeding, global float* occlusionOut,
+                                       global float4* indirect) {
+  int x0 = get_global_id(0) * 2 * GI_VW, y = get_global_id(1);
+  if (x0 >= width || y >= height) return;
+  size_t row0 = (size_t)y * width;
   intV lanes = (intV)(GI_LANES);
+  floatV zE, zO;  // depths of the even and the odd pixels
+  if (x0 + 2 * GI_VW <= width) {
+    floatV a = vloadV(0, depth + row0 + x0), b = vloadV(0, depth + row0 + x0 + GI_VW);
+    zE = SSAO_EVEN(a, b);
+    zO = SSAO_ODD(a, b);
+  } else {  // pixels past the border repeat the last one (not stored)
+    zE = GI_GATHER(floatV, depth + row0, min(x0 + 2 * lanes, width - 1));
+    zO = GI_GATHER(floatV, depth + row0, min(x0 + 2 * lanes + 1, width - 1));
+  }
+  floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
+  floatV occE = zero, cntE = zero, ExE = zero, EyE = zero, EzE = zero;
+  floatV occO = zero, cntO = zero, ExO = zero, EyO = zero, EzO = zero;
   global const float* irr = (global const float*)irradianceIn;
-  global const uint* rec = (global const uint*)records;
-  int c0 = px0 / 2 - 2, v0 = (y + 1) / 2 - 2;
-#if GI_VW > 1
-  bool interior = c0 >= 0 && c0 + GI_VW <= gridWidth;
-  floatV oddLane = convert_floatV(lanes & 1);
-#endif
+  int c0 = x0 / 2 - 2, v0 = (y + 1) / 2 - 2;
+  bool interior = c0 >= 0 && c0 + 4 + GI_VW <= gridWidth;
 #pragma unroll
   for (int dy = 0; dy < 4; ++dy) {
     int vv = v0 + dy;
     if (vv < 0 || vv >= gridHeight) continue;
     int row = vv * gridWidth;
     float offsetY = (float)(y - 2 * vv);  // camera pixels below the grid row's pixel centres
-    floatV rA = zero, rgx = zero, rgy = zero, ro = zero, rx = zero, ry = zero, rw = zero, unused;
-#if GI_VW > 1
-    if (interior) {
-      uintV w0, w1;
-      SSAO_LOAD_RECORDS(rec + 2 * (row + c0), w0, w1)
-      rA = as_floatV(w0);
-      rgx = ssao_half_value(w1 << 16);
-      rgy = ssao_half_value(w1);
-      ro = vloadV(0, occlusionIn + row + c0);
-      if (bleeding) GI_AOS4_LOAD(irr + (size_t)(row + c0) * 4, rx, ry, rw, unused)
-    }
-#endif
 #pragma unroll
-    for (int dx = 0; dx < 4; ++dx) {
-      floatV A, gqx, gqy, offsetX, oq, ex = zero, ey = zero, ez = zero;
+    for (int k = 0; k < 5; ++k) {
+      floatV A, Q, slopeY, oq, ex = zero, ey = zero, ez = zero, unused;
       intV inside;
-#if GI_VW > 1
       if (interior) {
+        int c = row + c0 + k;
         inside = lanes >= 0;  // all lanes
-        A = SSAO_UP_TAP(rA, dx);
-        gqx = SSAO_UP_TAP(rgx, dx);
-        gqy = SSAO_UP_TAP(rgy, dx);
-        offsetX = (float)(4 - 2 * dx) - oddLane;
-        oq = SSAO_UP_TAP(ro, dx);
-        if (bleeding) {
-          ex = SSAO_UP_TAP(rx, dx);
-          ey = SSAO_UP_TAP(ry, dx);
-          ez = SSAO_UP_TAP(rw, dx);
-        }
-      } else
-#endif
-      {
-        intV x = px0 + lanes, u = (x + 1) / 2 - 2 + dx;
+        A = vloadV(0, gridInvDepth + c);
+        Q = vloadV(0, gridSlopeX + c);
+        slopeY = vloadV(0, gridSlopeY + c);
+        oq = vloadV(0, occlusionIn + c);
+        if (bleeding) GI_AOS4_LOAD(irr + (size_t)c * 4, ex, ey, ez, unused)
+      } else {
+        intV u = c0 + k + lanes;
         inside = (u >= 0) & (u < gridWidth);
         intV uc = row + clamp(u, 0, gridWidth - 1);
-        uintV w0, w1;
-        GI_GATHER_AOS2(uint, rec, uc, w0, w1);
-        A = as_floatV(w0);
-        gqx = ssao_half_value(w1 << 16);
-        gqy = ssao_half_value(w1);
-        offsetX = convert_floatV(x - 2 * u);
+        A = GI_GATHER(floatV, gridInvDepth, uc);
+        Q = GI_GATHER(floatV, gridSlopeX, uc);
+        slopeY = GI_GATHER(floatV, gridSlopeY, uc);
         oq = GI_GATHER(floatV, occlusionIn, uc);
-        if (bleeding) {
-          intV u4 = uc * 4;
-          ex = GI_GATHER(floatV, irr, u4);
-          ey = GI_GATHER(floatV, irr, u4 + 1);
-          ez = GI_GATHER(floatV, irr, u4 + 2);
-        }
+        if (bleeding) GI_GATHER_AOS4(float, irr, uc, ex, ey, ez, unused)
       }
-      // The pixel's depth relative to q's plane on its ray: z·(1/depth of the plane there) − 1.
-      floatV e = z * A * (1.0f + gqx * offsetX + gqy * offsetY) - 1.0f;
-      intV take = inside & (A > 0.0f) & (fabs(e) <= tau);
-      occ += GI_SEL(zero, oq, take);
-      count += GI_SEL(zero, one, take);
-      if (bleeding) {
-        Ex += GI_SEL(zero, ex, take);
-        Ey += GI_SEL(zero, ey, take);
-        Ez += GI_SEL(zero, ez, take);
-      }
+      // 1/depth of the grid pixel's plane at camera-pixel offset (dx, offsetY) from its centre:
+      // P + Q·dx (ssao_depth_planes); P = NaN (no tap passes) outside the grid and on the
+      // background (A = 0).
+      floatV P = GI_SEL((floatV)(NAN), A + slopeY * offsetY, inside & (A > 0.0f));
+      if (k < 4) SSAO_UP_TAP(zE, (float)(4 - 2 * k), occE, cntE, ExE, EyE, EzE)
+      if (k > 0) SSAO_UP_TAP(zO, (float)(5 - 2 * k), occO, cntO, ExO, EyO, EzO)
     }
   }
   // No grid pixel accepted (or the background): no occlusion, no bleeding, the upstream value kept.
-  intV surface = isfinite(z) & (count > 0.0f);
-  floatV inv = GI_SEL(zero, one / fmax(count, one), surface);
-  occ *= inv;
-  ssao_store1(occlusionOut, i0, valid, occ);
-  floatV ix = zero, iy = zero, iz = zero, iw = zero;
-  if (upstream) SSAO_LOAD4(indirect, i0, valid, ix, iy, iz, iw)
-  floatV keep = 1.0f - occ;
-  floatV ox = keep * ix, oy = keep * iy, oz = keep * iz;
-  if (bleeding) {
-    floatV ax, ay, az, aw;
-    SSAO_LOAD4(albedo, i0, valid, ax, ay, az, aw)
-    floatV k = GI_SEL(zero, GI_INV_PI * inv, surface);
-    ox += ax * k * Ex;
-    oy += ay * k * Ey;
-    oz += az * k * Ez;
-  }
-  SSAO_STORE4(indirect, i0, valid, ox, oy, oz, iw)
+  intV surfE = isfinite(zE) & (cntE > 0.0f), surfO = isfinite(zO) & (cntO > 0.0f);
+  floatV invE = GI_SEL(zero, one / fmax(cntE, one), surfE), invO = GI_SEL(zero, one / fmax(cntO, one), surfO);
+  occE *= invE;
+  occO *= invO;
+  floatV kE = GI_INV_PI * invE, kO = GI_INV_PI * invO;
+  int i0 = (int)row0 + x0;
+  ssao_compose(i0, min(GI_VW, width - x0), SSAO_INTERLEAVE_LO(occE, occO), SSAO_INTERLEAVE_LO(kE, kO),
+               SSAO_INTERLEAVE_LO(ExE, ExO), SSAO_INTERLEAVE_LO(EyE, EyO), SSAO_INTERLEAVE_LO(EzE, EzO), upstream,
+               bleeding, albedo, occlusionOut, indirect);
+  if (x0 + GI_VW < width)
+    ssao_compose(i0 + GI_VW, min(GI_VW, width - x0 - GI_VW), SSAO_INTERLEAVE_HI(occE, occO),
+                 SSAO_INTERLEAVE_HI(kE, kO), SSAO_INTERLEAVE_HI(ExE, ExO), SSAO_INTERLEAVE_HI(EyE, EyO),
+                 SSAO_INTERLEAVE_HI(EzE, EzO), upstream, bleeding, albedo, occlusionOut, indirect);
 }

@@ -10,6 +10,7 @@
 // - radius 0 = 5 % of the scene's bounding-box diagonal; bias 0 = 1 % of the radius.
 #include "gi/ssao/ssao_technique.h"
 #include "util/halton.h"
+#include "cl/gather_width.h"
 
 #include <glm/gtc/type_ptr.hpp>
 
@@ -100,7 +101,16 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
     program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)},
                                                               {"GI_SSAO_DOWN", std::to_string(s.downsample)}});
     occlusionKernel_ = program_.kernel("ssao_occlusion");
-    blurKernel_ = program_.kernel(s.downsample == 1 ? "ssao_blur_compose" : "ssao_upsample_blur_compose");
+    if (s.downsample == 1) {
+      blurKernel_ = program_.kernel("ssao_blur_compose");
+    } else {
+      // The native vector width (8 lanes with AVX2): its two sets of 16-wide accumulators (even
+      // and odd pixels) spill the 16 AVX2 registers (docs/PERFORMANCE.md).
+      blurProgram_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl",
+                                        cl::withGatherWidth(f.ctx, {{"GI_SSAO_SAMPLES", std::to_string(s.samples)},
+                                                                    {"GI_SSAO_DOWN", "2"}}));
+      blurKernel_ = blurProgram_.kernel("ssao_upsample_blur_compose");
+    }
     planesKernel_ = program_.kernel("ssao_depth_planes");
     kernelVectors_ = f.ctx.upload(ssaoKernelVectors(s.samples), "ssao kernel vectors");
     programSamples_ = s.samples;
@@ -113,11 +123,19 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
   if (d == 2 && !gridDepth_) {
     gridDepth_ = cl::Buffer(f.ctx, size_t(gw) * gh * 4, CL_MEM_READ_WRITE, "ssao grid depth");
     gridNormal_ = cl::Buffer(f.ctx, size_t(gw) * gh * 16, CL_MEM_READ_WRITE, "ssao grid geometric normal");
+    gridInvDepth_ = cl::Buffer(f.ctx, size_t(gw) * gh * 4, CL_MEM_READ_WRITE, "ssao grid 1/depth");
+    gridSlopeX_ = cl::Buffer(f.ctx, size_t(gw) * gh * 4, CL_MEM_READ_WRITE, "ssao grid 1/depth slope x");
+    gridSlopeY_ = cl::Buffer(f.ctx, size_t(gw) * gh * 4, CL_MEM_READ_WRITE, "ssao grid 1/depth slope y");
   }
-  // At full resolution the grid is the G-buffer itself (gridDepth/gridNormal are not written).
+  // At full resolution the grid is the G-buffer itself (the grid planes are not written: any buffer
+  // stands in for them).
   const cl::Buffer& depth = d == 1 ? g.visibility.depth : gridDepth_;
   const cl::Buffer& normal = d == 1 ? g.geoNormal : gridNormal_;
-  planesKernel_.args(gw, gh, g.width, g.view, projection, g.visibility.depth, g.geoNormal, records_, depth, normal);
+  const cl::Buffer& invDepth = d == 1 ? records_ : gridInvDepth_;
+  const cl::Buffer& slopeX = d == 1 ? records_ : gridSlopeX_;
+  const cl::Buffer& slopeY = d == 1 ? records_ : gridSlopeY_;
+  planesKernel_.args(gw, gh, g.width, g.view, projection, g.visibility.depth, g.geoNormal, records_, depth, normal,
+                     invDepth, slopeX, slopeY);
   f.ctx.launch(planesKernel_, pixelGroups(f.ctx.vectorWidth(), gw, gh), "ssao: depth planes");
   occlusionKernel_.args(gw, gh, g.width, g.view, projection, depth, normal, records_, kernelVectors_, rotations_,
                         s.radius, s.bias, int(s.bleeding), g.position, g.normal, f.direct, rawOcclusion_,
@@ -134,9 +152,11 @@ void SsaoTechnique::blurComposePass(const FrameResources& f, const SsaoSettings&
     f.ctx.launch(blurKernel_, pixelGroups(f.ctx.vectorWidth(), g.width, g.height), "ssao: blur + compose");
   } else {
     const int gw = (g.width + 1) / 2, gh = (g.height + 1) / 2;
-    blurKernel_.args(g.width, g.height, gw, gh, g.visibility.depth, g.albedo, records_, rawOcclusion_,
-                     rawIrradiance_, s.blurTau, int(upstream), int(s.bleeding), occlusion_, indirect);
-    f.ctx.launch(blurKernel_, pixelGroups(f.ctx.vectorWidth(), g.width, g.height),
+    blurKernel_.args(g.width, g.height, gw, gh, g.visibility.depth, g.albedo, gridInvDepth_, gridSlopeX_,
+                     gridSlopeY_, rawOcclusion_, rawIrradiance_, s.blurTau, int(upstream), int(s.bleeding), occlusion_,
+                     indirect);
+    // 2·vw camera pixels per work-item (the even and the odd ones).
+    f.ctx.launch(blurKernel_, pixelGroups(2 * cl::gatherVectorWidth(f.ctx), g.width, g.height),
                  "ssao: upsample, blur + compose");
   }
 }

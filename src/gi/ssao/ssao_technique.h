@@ -60,10 +60,11 @@ public:
   const cl::Buffer& occlusion() const { return occlusion_; }
 
 private:
-  cl::Program program_;
+  cl::Program program_, blurProgram_;
   cl::Kernel occlusionKernel_, blurKernel_, planesKernel_;
   cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_, records_;
-  cl::Buffer gridDepth_, gridNormal_;  // downsample = 2: the grid pixels' depth and geometric normal
+  // downsample = 2: the grid pixels' depth, geometric normal, and planes (1/depth and its slopes).
+  cl::Buffer gridDepth_, gridNormal_, gridInvDepth_, gridSlopeX_, gridSlopeY_;
   int programSamples_ = 0, programDownsample_ = 0;
 };
 
