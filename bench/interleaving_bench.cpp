@@ -9,7 +9,8 @@
 //     in [0, 1] (the thesis's weights);
 //   - error against the path-traced one-bounce reference (diffuse only): SSIM of the display
 //     images, relMSE of the linear indirect images.
-// Gather = `vpl` (1×1) and `igi` (n×m): all-pairs VPL gathering, interleaved. Splatting = `splat`
+// Gather = `vpl` (1×1) and `igi` (n×m): all-pairs VPL gathering, interleaved, with the box
+// discontinuity filter (the default) and with the separable one (the thesis's form). Splatting = `splat`
 // un-interleaved and interleaved (ε = 1e-4; both VPL-to-set orderings; rows marked
 // "[vs splat 1x1]" compare with the un-interleaved splat, the thesis's SII comparison; interleaved
 // splatting is masked per lane, so its time is not an interleaving speed-up). `rsm` (RSM gather
@@ -122,11 +123,14 @@ int main(int argc, char** argv) {
                     intensitySsd(r.indirect, b.indirect, s.exposure), ssim, metrics::relMse(ref, r.indirect));
       };
       row("gather (vpl)", "1x1", base, base);
-      for (auto [pn, pm] : patterns) {
-        Result r = run(ctx, s, size, frames, "igi",
-                       {"igi.count=" + N, "igi.n=" + std::to_string(pn), "igi.m=" + std::to_string(pm)});
-        row("gather (igi)", std::to_string(pn) + "x" + std::to_string(pm), r, base);
-      }
+      for (const char* filter : {"box", "separable"})
+        for (auto [pn, pm] : patterns) {
+          Result r = run(ctx, s, size, frames, "igi",
+                         {"igi.count=" + N, "igi.n=" + std::to_string(pn), "igi.m=" + std::to_string(pm),
+                          std::string("igi.filter=") + filter});
+          row(filter == std::string("box") ? "gather (igi)" : "gather (igi, separable filter)",
+              std::to_string(pn) + "x" + std::to_string(pm), r, base);
+        }
       Result sp = run(ctx, s, size, frames, "splat", {"splat.count=" + N});
       row("splat eps=1/256", "1x1", sp, base);
       Result sp4 = run(ctx, s, size, frames, "splat", {"splat.count=" + N, "splat.epsilon=1e-4"});

@@ -15,6 +15,13 @@
 // copy's depth is NaN outside the image and at pixels without a surface, so the one comparison
 // |z_q − z_p| ≤ τ_z·z_p also rejects them: the window loop has no border or empty-pixel tests.
 // (A separate padded-plane pass cost a DRAM write and read-back of 32 bytes per pixel.)
+//
+// Separable form (`igi.filter=separable`, the thesis's separable blur, seed 000 §4): a GI_FX × 1
+// pass writing the filtered E, then a 1 × GI_FY pass over it writing L (GI_VW = 1: two launches;
+// CPU: both in one launch, GI_FILTER_SEPARABLE, the row pass kept in private memory). Each pass runs the same
+// test against its centre pixel, so without discontinuities it is the n×m box; at discontinuities
+// a pixel can receive light through an intermediate that passed both tests (a cross-shaped path
+// the 2D window would reject). GI_FX + GI_FY taps instead of GI_FX · GI_FY.
 // GI_VW = 1 (GPUs): one pixel per work-item, neighbours read from the G-buffer.
 #include "common/math.h"
 #include "common/shared_types.h"
@@ -28,6 +35,11 @@
 #endif
 #ifndef GI_SAME_INSTANCE
 #define GI_SAME_INSTANCE 0
+#endif
+// 1: write L = ρ/π · filtered E (the last pass); 0: write the filtered E itself (the first pass of
+// the separable form, whose second pass filters it again along the other axis).
+#ifndef GI_FILTER_APPLY_ALBEDO
+#define GI_FILTER_APPLY_ALBEDO 1
 #endif
 #if GI_FX > 16 || GI_FY > 16
 #error "discontinuity filter window larger than 16x16"
@@ -61,7 +73,11 @@ kernel void discontinuity_filter(int width, int height, global const float4* irr
       ws += 1.0f;
     }
   float3 e = ws > 0.0f ? sum / ws : irradiance[p].xyz;
+#if GI_FILTER_APPLY_ALBEDO
   out[p] = (float4)(albedo[p].xyz * (e * GI_INV_PI), 0.0f);
+#else
+  out[p] = (float4)(e, 0.0f);
+#endif
 }
 #else
 
@@ -147,6 +163,22 @@ inline void filterCopyRow(int width, int height, int xs, int y, global const flo
   }
 }
 
+#ifndef GI_FILTER_SEPARABLE
+#define GI_FILTER_SEPARABLE 0
+#endif
+
+// The §3 test of copied row q's column o against the pixels (z, n, id) of the lanes.
+inline intV filterAccepts(float (*q)[GI_FILTER_SPAN], int o, floatV z, floatV tz, floatV nx, floatV ny, floatV nz,
+                          floatV id, float cosTauN) {
+  floatV dz = fabs(vloadV(0, q[3] + o) - z);  // NaN outside the image and where no surface: rejected
+  floatV dn = vloadV(0, q[4] + o) * nx + vloadV(0, q[5] + o) * ny + vloadV(0, q[6] + o) * nz;
+  intV ok = (dz <= tz) & (dn >= cosTauN);
+#if GI_SAME_INSTANCE
+  ok &= as_uintV(vloadV(0, q[7] + o)) == as_uintV(id);
+#endif
+  return ok;
+}
+
 // Same test, same summation order (dy outer, dx inner) as the host mirror in the tests.
 kernel void discontinuity_filter(int width, int height, global const float* irradiance, global const float* depth,
                                  global const float* geoNormal, global const uint* instance,
@@ -157,52 +189,93 @@ kernel void discontinuity_filter(int width, int height, global const float* irra
   for (int r = 0; r < GI_FILTER_IN_ROWS; ++r)
     filterCopyRow(width, height, x0 - GI_FILTER_APRON, y0 - GI_FY / 2 + r, irradiance, depth, geoNormal, instance,
                   &rows[r][0][0]);
+#if GI_FILTER_SEPARABLE
+  // Separable form, fused: the row pass over every copied row (its E filtered along x at this
+  // work-item's columns, each row pixel tested against itself), then below the column pass over
+  // those values. The same values as the two-pass form (GI_VW = 1 runs it as two launches).
+  float rowE[GI_FILTER_IN_ROWS][3][GI_VW];
+  for (int r = 0; r < GI_FILTER_IN_ROWS; ++r) {
+    float(*c)[GI_FILTER_SPAN] = rows[r];
+    floatV z = vloadV(0, c[3] + GI_FILTER_APRON), nx = vloadV(0, c[4] + GI_FILTER_APRON),
+           ny = vloadV(0, c[5] + GI_FILTER_APRON), nz = vloadV(0, c[6] + GI_FILTER_APRON);
+    floatV id = GI_SAME_INSTANCE ? vloadV(0, c[GI_FILTER_PLANES - 1] + GI_FILTER_APRON) : z;
+    floatV tz = tauZ * z, sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), ws = (floatV)(0.0f);
+#pragma unroll
+    for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
+      int o = GI_FILTER_APRON + dx;
+      intV ok = filterAccepts(c, o, z, tz, nx, ny, nz, id, cosTauN);
+      sr += select((floatV)(0.0f), vloadV(0, c[0] + o), ok);
+      sg += select((floatV)(0.0f), vloadV(0, c[1] + o), ok);
+      sb += select((floatV)(0.0f), vloadV(0, c[2] + o), ok);
+      ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
+    }
+    intV accepted = ws > 0.0f;
+    floatV wdiv = select((floatV)(1.0f), ws, accepted);
+    vstoreV(select(vloadV(0, c[0] + GI_FILTER_APRON), sr / wdiv, accepted), 0, rowE[r][0]);
+    vstoreV(select(vloadV(0, c[1] + GI_FILTER_APRON), sg / wdiv, accepted), 0, rowE[r][1]);
+    vstoreV(select(vloadV(0, c[2] + GI_FILTER_APRON), sb / wdiv, accepted), 0, rowE[r][2]);
+  }
+#endif
   for (int r = 0; r < GI_FILTER_ROWS; ++r) {
     int y = y0 + r;
     if (y >= height) break;
     float(*own)[GI_FILTER_SPAN] = rows[r + GI_FY / 2];
     floatV z = vloadV(0, own[3] + GI_FILTER_APRON), nx = vloadV(0, own[4] + GI_FILTER_APRON),
            ny = vloadV(0, own[5] + GI_FILTER_APRON), nz = vloadV(0, own[6] + GI_FILTER_APRON);
-#if GI_SAME_INSTANCE
-    floatV id = vloadV(0, own[7] + GI_FILTER_APRON);
-#endif
+    floatV id = GI_SAME_INSTANCE ? vloadV(0, own[GI_FILTER_PLANES - 1] + GI_FILTER_APRON) : z;
     size_t i = (size_t)y * width + x0;
     bool whole = x0 + GI_VW <= width;
     // The albedo is loaded before the window loop so that its cache misses overlap the arithmetic.
     floatV ar = (floatV)(0.0f), ag = (floatV)(0.0f), ab = (floatV)(0.0f), unused;
+#if GI_FILTER_APPLY_ALBEDO
     if (whole) GI_AOS4_LOAD(albedo + 4 * i, ar, ag, ab, unused)
+#endif
     floatV sr = (floatV)(0.0f), sg = (floatV)(0.0f), sb = (floatV)(0.0f), ws = (floatV)(0.0f);
     floatV tz = tauZ * z;
+#if GI_FILTER_SEPARABLE
+    // Column pass over the row-filtered E, tested against this pixel.
+#pragma unroll
+    for (int dy = 0; dy < GI_FY; ++dy) {
+      intV ok = filterAccepts(rows[r + dy], GI_FILTER_APRON, z, tz, nx, ny, nz, id, cosTauN);
+      sr += select((floatV)(0.0f), vloadV(0, rowE[r + dy][0]), ok);
+      sg += select((floatV)(0.0f), vloadV(0, rowE[r + dy][1]), ok);
+      sb += select((floatV)(0.0f), vloadV(0, rowE[r + dy][2]), ok);
+      ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
+    }
+    floatV ownR = vloadV(0, rowE[r + GI_FY / 2][0]), ownG = vloadV(0, rowE[r + GI_FY / 2][1]),
+           ownB = vloadV(0, rowE[r + GI_FY / 2][2]);
+#else
 #pragma unroll
     for (int dy = 0; dy < GI_FY; ++dy) {
       float(*q)[GI_FILTER_SPAN] = rows[r + dy];
 #pragma unroll
       for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
         int o = GI_FILTER_APRON + dx;
-        floatV dz = fabs(vloadV(0, q[3] + o) - z);  // NaN outside the image and where no surface: rejected
-        floatV dn = vloadV(0, q[4] + o) * nx + vloadV(0, q[5] + o) * ny + vloadV(0, q[6] + o) * nz;
-        intV ok = (dz <= tz) & (dn >= cosTauN);
-#if GI_SAME_INSTANCE
-        ok &= as_uintV(vloadV(0, q[7] + o)) == as_uintV(id);
-#endif
+        intV ok = filterAccepts(q, o, z, tz, nx, ny, nz, id, cosTauN);
         sr += select((floatV)(0.0f), vloadV(0, q[0] + o), ok);
         sg += select((floatV)(0.0f), vloadV(0, q[1] + o), ok);
         sb += select((floatV)(0.0f), vloadV(0, q[2] + o), ok);
         ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
       }
     }
+    floatV ownR = vloadV(0, own[0] + GI_FILTER_APRON), ownG = vloadV(0, own[1] + GI_FILTER_APRON),
+           ownB = vloadV(0, own[2] + GI_FILTER_APRON);
+#endif
     // No neighbour accepted (not even the pixel itself, e.g. a zero normal): its own E. Pixels
     // without a surface (NaN depth): 0.
     intV accepted = ws > 0.0f;
     floatV wdiv = select((floatV)(1.0f), ws, accepted);
-    floatV er = select(vloadV(0, own[0] + GI_FILTER_APRON), sr / wdiv, accepted),
-           eg = select(vloadV(0, own[1] + GI_FILTER_APRON), sg / wdiv, accepted),
-           eb = select(vloadV(0, own[2] + GI_FILTER_APRON), sb / wdiv, accepted);
+    floatV er = select(ownR, sr / wdiv, accepted), eg = select(ownG, sg / wdiv, accepted),
+           eb = select(ownB, sb / wdiv, accepted);
     intV surface = !isnan(z);
     if (whole) {
       floatV zero = (floatV)(0.0f);
+#if GI_FILTER_APPLY_ALBEDO
       floatV lr = select(zero, ar * (er * GI_INV_PI), surface), lg = select(zero, ag * (eg * GI_INV_PI), surface),
              lb = select(zero, ab * (eb * GI_INV_PI), surface);
+#else
+      floatV lr = select(zero, er, surface), lg = select(zero, eg, surface), lb = select(zero, eb, surface);
+#endif
       GI_AOS4_STORE(out + 4 * i, lr, lg, lb, zero)
     } else {
       float v[4][GI_VW];
@@ -211,8 +284,11 @@ kernel void discontinuity_filter(int width, int height, global const float* irra
       vstoreV(eb, 0, v[2]);
       vstoreV(convert_floatV(surface), 0, v[3]);
       for (int l = 0; x0 + l < width; ++l) {
-        float3 a = vload3(0, albedo + 4 * (i + l));
-        float3 L = v[3][l] != 0.0f ? a * ((float3)(v[0][l], v[1][l], v[2][l]) * GI_INV_PI) : (float3)(0.0f);
+        float3 e = (float3)(v[0][l], v[1][l], v[2][l]);
+#if GI_FILTER_APPLY_ALBEDO
+        e = vload3(0, albedo + 4 * (i + l)) * (e * GI_INV_PI);
+#endif
+        float3 L = v[3][l] != 0.0f ? e : (float3)(0.0f);
         vstore4((float4)(L, 0.0f), i + l, out);
       }
     }

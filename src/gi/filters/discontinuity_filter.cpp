@@ -8,17 +8,42 @@
 
 namespace gi {
 
+FilterShape filterShapeFromName(const std::string& name) {
+  if (name == "box") return FilterShape::Box;
+  if (name == "separable") return FilterShape::Separable;
+  throw Error("discontinuity filter shape '" + name + "' is not box or separable");
+}
+
 void DiscontinuityFilter::run(const GBuffer& g, const cl::Buffer& irradiance, int fx, int fy, const GeometryTest& t,
-                              cl::Buffer& out) {
+                              cl::Buffer& out, FilterShape shape) {
   if (fx < 1 || fy < 1 || fx > kMaxWindow || fy > kMaxWindow)
     throw Error("discontinuity filter window " + std::to_string(fx) + "x" + std::to_string(fy) + " outside 1x1 .. " +
                 std::to_string(kMaxWindow) + "x" + std::to_string(kMaxWindow));
-  auto key = std::make_tuple(fx, fy, t.sameInstance);
+  if (shape == FilterShape::Box) {
+    pass(g, irradiance, fx, fy, t, Pass::Box, out);
+    return;
+  }
+  if (ctx_.vectorWidth() > 1) {  // both passes in one launch (the kernel's GI_FILTER_SEPARABLE)
+    pass(g, irradiance, fx, fy, t, Pass::FusedSeparable, out);
+    return;
+  }
+  size_t bytes = size_t(g.width) * g.height * 16;
+  if (!rowFiltered_ || rowFiltered_.bytes() != bytes)
+    rowFiltered_ = cl::Buffer(ctx_, bytes, CL_MEM_READ_WRITE, label_ + " rows");
+  pass(g, irradiance, fx, 1, t, Pass::RowsToIrradiance, rowFiltered_);
+  pass(g, rowFiltered_, 1, fy, t, Pass::Box, out);
+}
+
+void DiscontinuityFilter::pass(const GBuffer& g, const cl::Buffer& irradiance, int fx, int fy, const GeometryTest& t,
+                               Pass kind, cl::Buffer& out) {
+  auto key = std::make_tuple(fx, fy, t.sameInstance, kind);
   auto it = kernels_.find(key);
   if (it == kernels_.end()) {
     cl::Program p = ctx_.buildProgram("kernels/gi/filters/discontinuity.cl",
                                       {{"GI_FX", std::to_string(fx)}, {"GI_FY", std::to_string(fy)},
                                        {"GI_SAME_INSTANCE", t.sameInstance ? "1" : "0"},
+                                       {"GI_FILTER_APPLY_ALBEDO", kind == Pass::RowsToIrradiance ? "0" : "1"},
+                                       {"GI_FILTER_SEPARABLE", kind == Pass::FusedSeparable ? "1" : "0"},
                                        {"GI_FILTER_ROWS", std::to_string(kRowsPerItem)}});
     cl::Kernel k = p.kernel("discontinuity_filter");
     it = kernels_.emplace(key, std::make_pair(std::move(p), std::move(k))).first;

@@ -1,7 +1,8 @@
 // Reusable geometry-aware passes (ALGORITHMS.md §3; kernels/gi/filters/discontinuity.cl):
 //   DiscontinuityFilter  box filter of irradiance over an fx×fy window (≥ the interleave
 //                        pattern), accepting neighbours by depth, geometric normal and optionally
-//                        instance id; writes L = ρ/π · E;
+//                        instance id; writes L = ρ/π · E. Box: the 2D window in one pass;
+//                        separable: an fx×1 pass then a 1×fy pass (fx + fy taps, not fx·fy);
 //   GeometryAwareUpsampler  reduced-resolution irradiance -> full resolution, same test.
 #pragma once
 #include <map>
@@ -20,17 +21,31 @@ struct GeometryTest {
   bool sameInstance = false; // also require the same instance id (filter only)
 };
 
+enum class FilterShape { Box, Separable };
+
+// "box" | "separable" -> FilterShape (the techniques' *.filter parameter).
+FilterShape filterShapeFromName(const std::string& name);
+
 class DiscontinuityFilter {
 public:
   DiscontinuityFilter(cl::Context& ctx, std::string label) : ctx_(ctx), label_(std::move(label)) {}
   // irradiance: float4 E per camera pixel; out: float4 L = ρ/π · filtered E.
-  void run(const GBuffer& g, const cl::Buffer& irradiance, int fx, int fy, const GeometryTest& t, cl::Buffer& out);
+  void run(const GBuffer& g, const cl::Buffer& irradiance, int fx, int fy, const GeometryTest& t, cl::Buffer& out,
+           FilterShape shape = FilterShape::Box);
 
 private:
+  enum class Pass {
+    Box,               // fx×fy window, writes L
+    RowsToIrradiance,  // fx×1 window, writes the filtered E (separable on GI_VW = 1, first launch)
+    FusedSeparable,    // row pass then column pass in one launch, writes L (vector devices)
+  };
+  void pass(const GBuffer& g, const cl::Buffer& irradiance, int fx, int fy, const GeometryTest& t, Pass kind,
+            cl::Buffer& out);
   cl::Context& ctx_;
   std::string label_;
-  // per window size and instance test
-  std::map<std::tuple<int, int, bool>, std::pair<cl::Program, cl::Kernel>> kernels_;
+  // per window size, instance test and pass kind
+  std::map<std::tuple<int, int, bool, Pass>, std::pair<cl::Program, cl::Kernel>> kernels_;
+  cl::Buffer rowFiltered_;  // separable on GI_VW = 1: E after the fx×1 launch
   static constexpr int kMaxWindow = 16;   // the kernel's largest GI_FILTER_APRON = kMaxWindow / 2
   static constexpr int kRowsPerItem = 16;  // GI_FILTER_ROWS: output rows per work-item (vector path)
 };

@@ -71,7 +71,7 @@ public:
       GeometryTest t;
       t.tauZ = p.getFloat("splat.tau_z");
       t.tauNDegrees = p.getFloat("splat.tau_n");
-      filter_->run(g, irradiance_, n, m, t, indirect);
+      filter_->run(g, irradiance_, n, m, t, indirect, filterShapeFromName(p.getChoice("splat.filter")));
     }
   }
 
@@ -101,6 +101,8 @@ TechniqueInfo splatTechniqueInfo() {
             p.addInt("splat.m", 1, 1, 8, "interleave pattern height");
             p.addChoice("splat.ordering", "stride", {"stride", "contiguous"},
                         "VPL-to-set assignment: stride = k mod n*m (Halton order), contiguous = consecutive blocks");
+            p.addChoice("splat.filter", "box", {"box", "separable"},
+                        "discontinuity filter (interleaved): box = 2D window; separable = row pass then column pass");
             p.addFloat("splat.tau_z", 0.05, 0.0, 10.0, "filter (interleaved): relative view-depth tolerance");
             p.addFloat("splat.tau_n", 25.0, 0.0, 180.0, "filter (interleaved): geometric-normal tolerance in degrees");
           },

@@ -87,7 +87,7 @@ public:
     t.tauZ = p.getFloat("igi.tau_z");
     t.tauNDegrees = p.getFloat("igi.tau_n");
     t.sameInstance = p.getBool("igi.same_instance");
-    filter_->run(f.gbuffer, irradiance_, fx, fy, t, indirect);
+    filter_->run(f.gbuffer, irradiance_, fx, fy, t, indirect, filterShapeFromName(p.getChoice("igi.filter")));
   }
 
 private:
@@ -124,6 +124,9 @@ TechniqueInfo igiTechniqueInfo() {
             p.addInt("igi.m", 4, 1, 8, "interleave pattern height");
             p.addInt("igi.filter_x", 0, 0, 16, "discontinuity filter window width; 0 = n (must be >= n)");
             p.addInt("igi.filter_y", 0, 0, 16, "discontinuity filter window height; 0 = m (must be >= m)");
+            p.addChoice("igi.filter", "box", {"box", "separable"},
+                        "discontinuity filter: box = the 2D window in one pass (Segovia); separable = a row pass "
+                        "then a column pass (the thesis's separable blur; filter_x + filter_y taps)");
             p.addFloat("igi.tau_z", 0.05, 0.0, 10.0, "filter: relative view-depth tolerance");
             p.addFloat("igi.tau_n", 25.0, 0.0, 180.0, "filter: geometric-normal tolerance in degrees");
             p.addBool("igi.same_instance", false, "filter: neighbours must share the instance id");
