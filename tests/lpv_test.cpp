@@ -257,8 +257,10 @@ TEST(LpvKernels, PropagationMatchesHost) {
 
 // The lookup from a buffer (the kernel interpolates) or from a 3D image (the sampler does; PoCL
 // in software with float weights, so the same bound holds; GPU samplers use 8-bit fractional
-// weights, up to 1/512 of the cell-to-cell difference: 4e-3 there).
-void lookupMatchesHost(LpvLookupStorage storage) {
+// weights, up to 1/512 of the cell-to-cell difference: 4e-3 there). With `steps` > 0 the grid is
+// propagated first, so that the last step writes the lookup grid (lpv.cl LPV_WRITE_LOOKUP) instead
+// of lpv_lookup_grid; the host then starts from the device's accumulated grid.
+void lookupMatchesHost(LpvLookupStorage storage, int steps = 0) {
   cl::Context& ctx = test::context();
   if (storage == LpvLookupStorage::Image) ASSERT_TRUE(ctx.device().imageSupport) << "the test device has no images";
   const int w = 32, h = 16;
@@ -282,6 +284,10 @@ void lookupMatchesHost(LpvLookupStorage storage) {
   LpvVolume v(ctx, kN, 2, storage);
   v.begin(kTwoCascades, 1.0f);
   v.setInjected(g.c);
+  if (steps > 0) {
+    v.propagate(steps, false);
+    g.c = v.readAccumulated();
+  }
   cl::Buffer out(ctx, size_t(w) * h * 16, CL_MEM_READ_WRITE, "out");
 
   auto irradiance = [&](int k, glm::vec3 q, glm::vec3 ng, glm::vec3 n) {
@@ -337,6 +343,7 @@ void lookupMatchesHost(LpvLookupStorage storage) {
 
 TEST(LpvKernels, LookupMatchesHost) { lookupMatchesHost(LpvLookupStorage::Buffer); }
 TEST(LpvKernels, LookupFrom3dImageMatchesHost) { lookupMatchesHost(LpvLookupStorage::Image); }
+TEST(LpvKernels, LookupAfterPropagationMatchesHost) { lookupMatchesHost(LpvLookupStorage::Buffer, 3); }
 
 // One cell at the centre of an empty 16³ grid, propagated without blocking. Step 1 keeps
 // Σ_faces ΔΩ_f · max(0, I(ω_f)) of the injected flux Φ (the face solid angles and directions of

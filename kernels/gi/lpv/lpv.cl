@@ -327,6 +327,26 @@ typedef int intL;
 #define LPV_LANE_IDS 0
 #endif
 
+// The lookup grid (lpv_lookup_grid below) for LPV_LANES cells of a row from their accumulated
+// coefficients c[0..3] (one channel) in cascade k: c times the clamped-cosine convolution and 1/s²,
+// stored as one float4 per cell at `out`. Written by the last propagation step of each cascade
+// and, when no step has run since the grid was set, by lpv_lookup_grid.
+inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, int k, global float4* out) {
+  float s = cascades[k].w, s2 = s * s;
+  floatL q0 = (GI_SH_COSCONV0 * GI_SH_Y0 / s2) * c[0], q1 = (GI_SH_COSCONV1 * GI_SH_Y1 / s2) * c[1],
+         q2 = (GI_SH_COSCONV1 * GI_SH_Y1 / s2) * c[2], q3 = (GI_SH_COSCONV1 * GI_SH_Y1 / s2) * c[3];
+#if LPV_LANES == GI_VW && GI_VW > 1
+  GI_AOS4_STORE((global float*)out, q0, q1, q2, q3);
+#else
+  float v[4][LPV_LANES];
+  vstoreL(q0, 0, v[0]);
+  vstoreL(q1, 0, v[1]);
+  vstoreL(q2, 0, v[2]);
+  vstoreL(q3, 0, v[3]);
+  for (int l = 0; l < LPV_LANES; ++l) out[l] = (float4)(v[0][l], v[1][l], v[2][l], v[3][l]);
+#endif
+}
+
 // Index of axis a's linear SH coefficient in the (Y00, y, z, x) order.
 #define LPV_COEF(a) ((a) == 0 ? 3 : (a))
 #define LPV_SIDE_SCALE 0.4472135955f  // 1/√5: ω = normalize(2·d ± e_b)
@@ -414,14 +434,17 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, con
 // unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them — or
 // occlusion off) without loading or computing any factor; the blocking is a compile-time constant
 // in each, so neither carries the other's work.
-// The accumulated grid is updated every other step (half its memory traffic): `accumulate` =
-// LPV_ACCUMULATE_NONE leaves it for the next step, LPV_ACCUMULATE_BOTH adds the source grid (the
-// previous step's result) and this step's, LPV_ACCUMULATE_THIS this step's alone (lpv_volume.cpp).
-#define LPV_ACCUMULATE_NONE 0
-#define LPV_ACCUMULATE_THIS 1
-#define LPV_ACCUMULATE_BOTH 2
+// The accumulated grid is updated every other step (half its memory traffic), by the flags in
+// `accumulate`: LPV_ADD_THIS adds this step's result, LPV_ADD_SOURCE the source grid (the previous
+// step's result, which that step left out); none leaves this step's result to the next step.
+// LPV_WRITE_LOOKUP (the last step of a cascade) also writes the lookup grid from the final sums,
+// which saves lpv_lookup_grid's pass over the accumulated grid (lpv_volume.cpp).
+#define LPV_ADD_THIS 1
+#define LPV_ADD_SOURCE 2
+#define LPV_WRITE_LOOKUP 4
 inline void lpv_propagate_step(global const float* src, global float* dst, global float* accumulated,
-                               global const float* faceGeometry, int k, int accumulate, const bool blocking) {
+                               global const float* faceGeometry, int k, int accumulate, constant float4* cascades,
+                               global float4* lookupGrid, const bool blocking) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2);
   size_t row = LPV_PAD + LPV_AT(k, 0, x0, y, z);  // plane 0 of the work-item's first cell
   intL x = x0 + LPV_LANE_IDS;
@@ -468,27 +491,32 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
       lpv_faces(dir, in, t[dir], o, blocking);
     }
     const float lobe[4] = {GI_SH_LOBE0, GI_SH_LOBE1, GI_SH_LOBE1, GI_SH_LOBE1};
+    floatL total[4];
 #pragma unroll
     for (int q = 0; q < 4; ++q) {
       size_t at = planes + q * LPV_N;
       floatL out = lobe[q] * o[q];
       vstoreL(out, 0, dst + at);
-      if (accumulate != LPV_ACCUMULATE_NONE) {
-        floatL sum = accumulate == LPV_ACCUMULATE_BOTH ? vloadL(0, src + at) + out : out;
-        vstoreL(vloadL(0, accumulated + at) + sum, 0, accumulated + at);
+      if (accumulate & LPV_ADD_THIS) {
+        floatL sum = accumulate & LPV_ADD_SOURCE ? vloadL(0, src + at) + out : out;
+        total[q] = vloadL(0, accumulated + at) + sum;
+        vstoreL(total[q], 0, accumulated + at);
       }
     }
+    if (accumulate & LPV_WRITE_LOOKUP)
+      lpv_store_lookup_cells(total, cascades, k, lookupGrid + (size_t)(k * 3 + ch) * LPV_CELLS + (z * LPV_N + y) * LPV_N + x0);
   }
 }
 
 kernel void lpv_propagate_blocked(global const float* src, global float* dst, global float* accumulated,
-                                  global const float* faceGeometry, int k, int accumulate) {
-  lpv_propagate_step(src, dst, accumulated, faceGeometry, k, accumulate, true);
+                                  global const float* faceGeometry, int k, int accumulate,
+                                  constant float4* cascades, global float4* lookupGrid) {
+  lpv_propagate_step(src, dst, accumulated, faceGeometry, k, accumulate, cascades, lookupGrid, true);
 }
 
 kernel void lpv_propagate_open(global const float* src, global float* dst, global float* accumulated, int k,
-                               int accumulate) {
-  lpv_propagate_step(src, dst, accumulated, 0, k, accumulate, false);
+                               int accumulate, constant float4* cascades, global float4* lookupGrid) {
+  lpv_propagate_step(src, dst, accumulated, 0, k, accumulate, cascades, lookupGrid, false);
 }
 
 // ---- lookup ----------------------------------------------------------------------------------
@@ -498,15 +526,16 @@ kernel void lpv_propagate_open(global const float* src, global float* dst, globa
 // 1/s² (radiance = intensity / s²): irradiance coefficients q with E(n) = q.x − q.y·n.y − q.z·n.z −
 // q.w·n.x for a surface with normal n (light arriving travels along −n). The lookup interpolates
 // them trilinearly; E is linear in q, so this equals the convolution of the interpolated grid.
-// One work-item per (cell, channel, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
+// LPV_LANES cells of a row per work-item, global (N / LPV_LANES, N, N · 3 · LPV_CASCADES) with
+// z + N·(k·3 + ch) along the third axis: the 4 coefficient rows are contiguous loads and the float4
+// cells one transposed store (one work-item per cell and channel compiled to scalar code).
 kernel void lpv_lookup_grid(global const float* accumulated, constant float4* cascades, global float4* lookupGrid) {
-  size_t cell = get_global_id(0), ch = get_global_id(1), k = get_global_id(2);
-  global const float* c =
-      accumulated + LPV_PAD + LPV_AT(k, ch * 4, cell % LPV_N, (cell / LPV_N) % LPV_N, cell / (LPV_N * LPV_N));
-  float s = cascades[k].w;
-  float4 conv = (float4)(GI_SH_COSCONV0 * GI_SH_Y0, GI_SH_COSCONV1 * GI_SH_Y1, GI_SH_COSCONV1 * GI_SH_Y1,
-                         GI_SH_COSCONV1 * GI_SH_Y1) / (s * s);
-  lookupGrid[(k * 3 + ch) * LPV_CELLS + cell] = conv * (float4)(c[0], c[LPV_N], c[2 * LPV_N], c[3 * LPV_N]);
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2) % LPV_N;
+  int slab = get_global_id(2) / LPV_N, k = slab / 3, ch = slab % 3;  // slab = k·3 + ch
+  global const float* c = accumulated + LPV_PAD + LPV_AT(k, ch * 4, x0, y, z);
+  floatL coefficients[4] = {vloadL(0, c), vloadL(0, c + LPV_N), vloadL(0, c + 2 * LPV_N), vloadL(0, c + 3 * LPV_N)};
+  lpv_store_lookup_cells(coefficients, cascades, k,
+                         lookupGrid + (size_t)slab * LPV_CELLS + (z * LPV_N + y) * LPV_N + x0);
 }
 
 // The lookup grid is a 3D image (LPV_N × LPV_N × LPV_N·3·cascades, the slabs stacked along z) on
@@ -538,7 +567,7 @@ inline int lpv_min_lane(intV v) {
 // Irradiance (W/m² per channel) of GI_VW pixels at p with geometric normal ng and shading normal n
 // from cascade k (per lane): trilinear over cell centres at p + ½ cell along ng (clamped at the
 // grid's border cells) in the lookup grid, E = Σ_corners weight · (q0 − q·n).
-inline void cascade_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, intV k, float3V p, float3V ng,
+__attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, intV k, float3V p, float3V ng,
                                float3V n, floatV* e) {
   floatV ox = 0.0f, oy = 0.0f, oz = 0.0f, s = 1.0f;
 #pragma unroll

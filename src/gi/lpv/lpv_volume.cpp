@@ -168,6 +168,7 @@ void LpvVolume::begin(const std::vector<LpvCascade>& layout, float injectionFixe
   ctx_.fill(gridAcc_, int64_t(0));
   ctx_.fill(geometryAcc_, int64_t(0));
   current_ = 0;
+  lookupGridCurrent_ = false;
 }
 
 void LpvVolume::inject(const cl::Buffer& position, const cl::Buffer& normal, const cl::Buffer& flux, int res,
@@ -195,6 +196,7 @@ void LpvVolume::resolve(bool geometry) {
   resolveInjection_.args(gridAcc_, 1.0f / injectionScale_, grids_[0], accumulated_);
   ctx_.launch(resolveInjection_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: resolve");
   current_ = 0;
+  lookupGridCurrent_ = false;
   if (!geometry) return;
   resolveGeometry_.args(geometryAcc_, 1.0f / kGeometryFixedScale, geometry_);
   ctx_.launch(resolveGeometry_, cl::NDRange::d2(nodesPerGrid(), size_t(cascades_)), "lpv: resolve");
@@ -211,6 +213,7 @@ void LpvVolume::setInjected(const std::vector<glm::vec4>& coefficients) {
   ctx_.write(grids_[0], planes.data(), planes.size() * sizeof(float));
   ctx_.write(accumulated_, planes.data(), planes.size() * sizeof(float));
   current_ = 0;
+  lookupGridCurrent_ = false;
 }
 
 std::vector<glm::vec4> LpvVolume::readGrid(const cl::Buffer& b) {
@@ -252,30 +255,38 @@ void LpvVolume::propagate(int iterations, bool blocking) {
   // one cascade but not for three (all cascades in one launch per step: 0.92 instead of 0.50–0.58 ms
   // per step and cascade on the idle machine). The cascades do not interact.
   // The accumulated grid already holds the source grid of the first step; each step's result is
-  // added to it by the next step together with that step's own (lpv.cl LPV_ACCUMULATE_*), or by
-  // the step itself when it is the last.
-  enum Accumulate { kNone = 0, kThis = 1, kBoth = 2 };
+  // added to it by the next step together with that step's own, or by the step itself when it is
+  // the last, which also writes the lookup grid (lpv.cl LPV_ADD_*, LPV_WRITE_LOOKUP).
+  const int addThis = 1, addSource = 2, writeLookup = 4;
   int start = current_;
   for (int k = 0; k < cascades_; ++k) {
     current_ = start;
     for (int i = 0; i < iterations; ++i) {
-      int accumulate = i % 2 ? kBoth : i + 1 == iterations ? kThis : kNone;
+      bool last = i + 1 == iterations;
+      int accumulate = (i % 2 ? addThis | addSource : last ? addThis : 0) | (last ? writeLookup : 0);
       // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
       if (blocking && i > 0) {
-        propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k, accumulate);
+        propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k, accumulate,
+                               layout_, lookupGrid_);
         ctx_.launch(propagateBlocked_, propagateRange_, "lpv: propagate");
       } else {
-        propagateOpen_.args(grids_[current_], grids_[1 - current_], accumulated_, k, accumulate);
+        propagateOpen_.args(grids_[current_], grids_[1 - current_], accumulated_, k, accumulate, layout_,
+                            lookupGrid_);
         ctx_.launch(propagateOpen_, propagateRange_, "lpv: propagate");
       }
       current_ = 1 - current_;
     }
   }
+  if (iterations > 0) lookupGridCurrent_ = true;
 }
 
 void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out) {
-  toLookupGrid_.args(accumulated_, layout_, lookupGrid_);
-  ctx_.launch(toLookupGrid_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: lookup grid");
+  if (!lookupGridCurrent_) {  // the grid was set or resolved after the last propagation step
+    toLookupGrid_.args(accumulated_, layout_, lookupGrid_);
+    ctx_.launch(toLookupGrid_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * 3 * cascades_),
+                "lpv: lookup grid");
+    lookupGridCurrent_ = true;
+  }
   if (storage_ == LpvLookupStorage::Image) {
     lookupImage_.copy(ctx_, lookupGrid_);
     lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),

@@ -92,7 +92,8 @@ public:
   // `iterations` gather steps; with `blocking`, first the blocking potential per cell face from
   // the geometry volume (static over the steps), which blocks every step but the first.
   void propagate(int iterations, bool blocking);
-  // Converts the accumulated grid into the lookup grid, then writes L = ρ/π · E per pixel.
+  // Converts the accumulated grid into the lookup grid unless the last propagation step already
+  // did, then writes L = ρ/π · E per pixel.
   void lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out);
 
   // For tests, coefficients as float4 [cascade][rgb][cell] (the device keeps planes, lpv.cl):
@@ -119,6 +120,7 @@ private:
   LpvImage lookupImage_;  // with LpvLookupStorage::Image: lookupGrid_'s copy the lookup samples
   cl::NDRange propagateRange_;
   int current_ = 0;
+  bool lookupGridCurrent_ = false;  // lookupGrid_ holds the accumulated grid (the last step writes it)
 };
 
 }  // namespace gi
