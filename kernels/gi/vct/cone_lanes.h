@@ -178,7 +178,7 @@ __attribute__((always_inline)) inline void vox_trilinear_lanes(global const floa
 
 // acc += weight × level `level` (per lane) seen along d (vox_level_sample). Level offsets in closed
 // form: Σ_{l<L} (N >> l)³ = 8·n³·(8^L − 1)/7 with n = N >> L, and (8^L − 1)/7 = octal 1…1 (L ones).
-inline void vox_level_sample_lanes(VoxelMipsV m, intV level, float3V p, float3V d, floatV weight, RgbaV* acc) {
+__attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, intV level, float3V p, float3V d, floatV weight, RgbaV* acc) {
   int logN = 31 - clz(m.N);
   intV shift = logN - level;
   floatV scale = as_floatV(convert_uintV(127 - level) << 23);  // 2^−level
