@@ -21,6 +21,7 @@
 //   build/interleaving_bench [--size 256] [--spp 512] [--frames 5]
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <string>
 #include <vector>
@@ -83,11 +84,18 @@ double intensitySsd(const Image& a, const Image& b, float exposure) {
 
 int main(int argc, char** argv) {
   int size = 256, spp = 512, frames = 5;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  const char* usage = "usage: interleaving_bench [--size 256] [--spp 512] [--frames 5]\n";
+  for (int i = 1; i < argc; i += 2) {
     std::string k = argv[i];
-    if (k == "--size") size = std::stoi(argv[i + 1]);
-    else if (k == "--spp") spp = std::stoi(argv[i + 1]);
-    else if (k == "--frames") frames = std::stoi(argv[i + 1]);
+    int* target = k == "--size" ? &size : k == "--spp" ? &spp : k == "--frames" ? &frames : nullptr;
+    char* end = nullptr;
+    long v = i + 1 < argc ? std::strtol(argv[i + 1], &end, 10) : 0;
+    if (!target || i + 1 >= argc || *end != '\0' || v < 1 || v > 100000) {
+      std::fprintf(stderr, "error: bad argument '%s'%s\n%s", argv[i],
+                   target ? " (expects a whole number 1..100000)" : "", usage);
+      return k == "--help" || k == "-h" ? 0 : 2;
+    }
+    *target = int(v);
   }
   try {
     cl::Context ctx(cl::selectDevice(""));

@@ -8,9 +8,14 @@
 //   splat_bounds  one work-item per VPL: screen-space tile rectangle of its influence sphere
 //                 (the 8 corners of the sphere's bounding box projected; a corner behind the eye
 //                 -> whole screen; zero flux -> empty);
-//   splat_bin     one work-item per 16×16 tile: the VPLs whose rectangle covers it, in index order
-//                 (deterministic, no atomics);
-//   splat_shade   GI_VW pixels of a tile row per work-item, each VPL of the tile's list broadcast.
+//   splat_bin     one work-item per (tile, VPL set): the set's VPLs whose rectangle covers the
+//                 tile, in index order (deterministic, no atomics);
+//   splat_shade   GI_VW pixels of one pixel class in a tile row per work-item, each VPL of the
+//                 (tile, set) list broadcast.
+// Interleaved (n×m sets, ALGORITHMS.md §2.3): tiles are 16n × 16 pixels, and a work-item's lanes
+// are the pixels of one class c = (x mod n) + n·(y mod m) of its tile row (x = x_c + n·lane), so
+// it evaluates only set c's VPLs: n·m times fewer pairs than un-interleaved, as the seed's
+// per-sub-buffer splatting. Not interleaved: n = m = 1, one set, 16 × 16 tiles.
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/vector_width.h"
@@ -29,8 +34,8 @@
 #define GATHER(p, i) ((p)[i])
 #endif
 
-kernel void splat_bounds(GiView camera, global const float4* vpls, int count, float epsilon, int tilesX,
-                         int tilesY, global int4* rects) {
+kernel void splat_bounds(GiView camera, global const float4* vpls, int count, float epsilon, int tileWidth,
+                         int tilesX, int tilesY, global int4* rects) {
   int k = get_global_id(0);
   if (k >= count) return;
   float4 a = vpls[3 * k];
@@ -59,9 +64,9 @@ kernel void splat_bounds(GiView camera, global const float4* vpls, int count, fl
     rects[k] = (int4)(0, 0, tilesX - 1, tilesY - 1);
     return;
   }
-  int tx0 = (int)floor(clamp(x0, -1.0f, (float)camera.width + 1.0f)) / SPLAT_TILE;
+  int tx0 = (int)floor(clamp(x0, -1.0f, (float)camera.width + 1.0f)) / tileWidth;
   int ty0 = (int)floor(clamp(y0, -1.0f, (float)camera.height + 1.0f)) / SPLAT_TILE;
-  int tx1 = (int)floor(clamp(x1, -1.0f, (float)camera.width + 1.0f)) / SPLAT_TILE;
+  int tx1 = (int)floor(clamp(x1, -1.0f, (float)camera.width + 1.0f)) / tileWidth;
   int ty1 = (int)floor(clamp(y1, -1.0f, (float)camera.height + 1.0f)) / SPLAT_TILE;
   if (x1 < 0.0f || y1 < 0.0f || x0 > (float)camera.width || y0 > (float)camera.height) {
     rects[k] = (int4)(1, 1, 0, 0);
@@ -70,44 +75,49 @@ kernel void splat_bounds(GiView camera, global const float4* vpls, int count, fl
   rects[k] = (int4)(max(tx0, 0), max(ty0, 0), min(tx1, tilesX - 1), min(ty1, tilesY - 1));
 }
 
-kernel void splat_bin(global const int4* rects, int count, int tilesX, int tilesY, global int* lists,
-                      global int* counts) {
-  int t = get_global_id(0);
-  if (t >= tilesX * tilesY) return;
+// VPL k belongs to set k mod sets ("stride", ordering 0) or ⌊k / perSet⌋ ("contiguous", 1);
+// perSet = ⌈count / sets⌉ is also each (tile, set) list's capacity.
+kernel void splat_bin(global const int4* rects, int count, int tilesX, int tilesY, int sets, int ordering,
+                      int perSet, global int* lists, global int* counts) {
+  int ts = get_global_id(0);
+  if (ts >= tilesX * tilesY * sets) return;
+  int t = ts / sets, c = ts % sets;
   int tx = t % tilesX, ty = t / tilesX;
-  global int* list = lists + (size_t)t * count;
+  global int* list = lists + (size_t)ts * perSet;
+  int first = ordering == 0 ? c : c * perSet, step = ordering == 0 ? sets : 1;
+  int end = ordering == 0 ? count : min(count, (c + 1) * perSet);
   int n = 0;
-  for (int k = 0; k < count; ++k) {
+  for (int k = first; k < end; k += step) {
     int4 r = rects[k];
     if (tx >= r.x && tx <= r.z && ty >= r.y && ty <= r.w) list[n++] = k;
   }
-  counts[t] = n;
+  counts[ts] = n;
 }
 
-// Interleaved (n·m > 1): pixel class c = (x mod n) + n·(y mod m) receives only the VPLs of set c
-// (ordering 0 "stride": VPL k -> set k mod n·m; 1 "contiguous": set ⌊k / ⌈N/(n·m)⌉⌋), weight × n·m,
-// and the output is irradiance E (for the discontinuity filter) instead of L = ρ/π·E. The lanes
-// still evaluate every listed VPL (masked), so interleaving changes the result, not the cost.
+// Interleaved (n·m > 1): the output is irradiance E × n·m (the set's weight; for the
+// discontinuity filter) instead of L = ρ/π·E. Work-item gx of row y: class column cx = gx mod n,
+// lane chunk and tile from the rest; lane l is pixel x = tile·16n + cx + n·(chunk·GI_VW + l).
 kernel void splat_shade(int width, int height, int tilesX, global const float* gPosition, global const float* gNormal,
-                        global const float4* albedo, global const float4* vpls, int count, float epsilon,
-                        global const int* lists, global const int* counts, int n, int m, int ordering,
+                        global const float4* albedo, global const float4* vpls, float epsilon,
+                        global const int* lists, global const int* counts, int n, int m, int perSet,
                         global float4* out GI_VPL_VISIBILITY_PARAMS) {
   GI_VPL_VISIBILITY_BEGIN
   int gx = get_global_id(0), y = get_global_id(1);
-  int x0 = gx * GI_VW;
-  if (x0 >= width || y >= height) return;
-  int tile = (y / SPLAT_TILE) * tilesX + x0 / SPLAT_TILE;
-  intV x = min(x0 + GI_LANES, width - 1);
+  const int chunks = SPLAT_TILE / GI_VW;
+  int cx = gx % n, chunk = (gx / n) % chunks, tx = gx / (n * chunks);
+  int xFirst = tx * SPLAT_TILE * n + cx + n * chunk * GI_VW;
+  if (xFirst >= width || y >= height) return;
+  int sets = n * m, set = cx + n * (y % m);
+  int tileSet = ((y / SPLAT_TILE) * tilesX + tx) * sets + set;
+  intV xs = xFirst + n * GI_LANES;
+  intV x = min(xs, width - 1);
   intV p4 = (y * width + x) * 4;
   floatV px = GATHER(gPosition, p4), py = GATHER(gPosition, p4 + 1), pz = GATHER(gPosition, p4 + 2),
          pw = GATHER(gPosition, p4 + 3);
   floatV nx = GATHER(gNormal, p4), ny = GATHER(gNormal, p4 + 1), nz = GATHER(gNormal, p4 + 2);
   floatV er = (floatV)(0.0f), eg = (floatV)(0.0f), eb = (floatV)(0.0f);
-  int sets = n * m;
-  intV cls = (x0 + GI_LANES) % n + n * (y % m);
-  int perSet = (count + sets - 1) / sets;
-  global const int* list = lists + (size_t)tile * count;
-  int listed = counts[tile];
+  global const int* list = lists + (size_t)tileSet * perSet;
+  int listed = counts[tileSet];
   for (int j = 0; j < listed; ++j) {
     int k = list[j];
     float4 a = vpls[3 * k], b = vpls[3 * k + 1], f = vpls[3 * k + 2];
@@ -121,14 +131,6 @@ kernel void splat_shade(int width, int height, int tilesX, global const float* g
 #else
     g = select((floatV)(0.0f), g, d2 * epsilon < a.w);
 #endif
-    if (sets > 1) {
-      int set = ordering == 0 ? k % sets : k / perSet;
-#if GI_VW == 1
-      g = cls == set ? g : 0.0f;
-#else
-      g = select((floatV)(0.0f), g, cls == set);
-#endif
-    }
 #ifdef GI_VPL_VISIBILITY
     g = GI_VPL_VISIBLE(px, py, pz, a.xyz, GI_SEL((floatV)(0.0f), g, pw > 0.0f));  // no rays for background lanes
 #endif
@@ -139,7 +141,7 @@ kernel void splat_shade(int width, int height, int tilesX, global const float* g
   float scale = (float)sets * GI_INV_PI;
 #if GI_VW == 1
   {
-    size_t i = (size_t)y * width + x0;
+    size_t i = (size_t)y * width + xFirst;
     float3 e = pw > 0.0f ? (float3)(er, eg, eb) * scale : (float3)(0.0f);
     out[i] = sets > 1 ? (float4)(e, 0.0f) : (float4)(albedo[i].xyz * e * GI_INV_PI, 0.0f);
   }
@@ -150,8 +152,8 @@ kernel void splat_shade(int width, int height, int tilesX, global const float* g
   vstoreV(eb, 0, vals[2]);
   vstoreV(pw, 0, vals[3]);
   for (int l = 0; l < GI_VW; ++l) {
-    if (x0 + l >= width) break;
-    size_t i = (size_t)y * width + x0 + l;
+    if (xFirst + n * l >= width) break;
+    size_t i = (size_t)y * width + xFirst + n * l;
     float3 e = vals[3][l] > 0.0f ? (float3)(vals[0][l], vals[1][l], vals[2][l]) * scale : (float3)(0.0f);
     out[i] = sets > 1 ? (float4)(e, 0.0f) : (float4)(albedo[i].xyz * e * GI_INV_PI, 0.0f);
   }

@@ -30,27 +30,32 @@ public:
     float eps = p.getFloat("splat.epsilon");
     generator_->generate(f.rsms, p.getInt("splat.count"), p.getFloat("splat.d_min"), vpls_, visibility_.bounces(f));
     const GBuffer& g = f.gbuffer;
-    int tilesX = (g.width + kTile - 1) / kTile, tilesY = (g.height + kTile - 1) / kTile;
-    int count = std::max(vpls_.count, 1);
-    if (count != capacity_ || tilesX * tilesY != tiles_) {
+    int n = p.getInt("splat.n"), m = p.getInt("splat.m"), sets = n * m;
+    int ordering = p.getChoice("splat.ordering") == "stride" ? 0 : 1;
+    bool interleaved = sets > 1;
+    // Interleaved: tiles 16n pixels wide, so that a work-item's GI_VW lanes of one pixel class
+    // (x stride n) stay in one tile (kernels/gi/splat/splat.cl).
+    int tileWidth = kTile * n;
+    int tilesX = (g.width + tileWidth - 1) / tileWidth, tilesY = (g.height + kTile - 1) / kTile;
+    int count = std::max(vpls_.count, 1), perSet = (count + sets - 1) / sets;
+    size_t listEntries = size_t(tilesX) * tilesY * sets * perSet;
+    if (listEntries != listEntries_ || count != capacity_ || size_t(tilesX) * tilesY * sets != tileSets_) {
       rects_ = cl::Buffer(f.ctx, size_t(count) * 16, CL_MEM_READ_WRITE, "splat VPL tile rectangles");
-      lists_ = cl::Buffer(f.ctx, size_t(count) * tilesX * tilesY * 4, CL_MEM_READ_WRITE, "splat tile lists");
-      counts_ = cl::Buffer(f.ctx, size_t(tilesX) * tilesY * 4, CL_MEM_READ_WRITE, "splat tile counts");
+      lists_ = cl::Buffer(f.ctx, listEntries * 4, CL_MEM_READ_WRITE, "splat (tile, set) lists");
+      counts_ = cl::Buffer(f.ctx, size_t(tilesX) * tilesY * sets * 4, CL_MEM_READ_WRITE, "splat (tile, set) counts");
       capacity_ = count;
-      tiles_ = tilesX * tilesY;
+      listEntries_ = listEntries;
+      tileSets_ = size_t(tilesX) * tilesY * sets;
     }
     if (vpls_.count == 0) {
       f.ctx.fill(indirect, 0.0f);
       return;
     }
-    bounds_.args(g.view, vpls_.vpls, vpls_.count, eps, tilesX, tilesY, rects_);
+    bounds_.args(g.view, vpls_.vpls, vpls_.count, eps, tileWidth, tilesX, tilesY, rects_);
     f.ctx.launch(bounds_, cl::NDRange::d1(cl::roundUp(vpls_.count, 64), 64), "splat: bounds");
-    bin_.args(rects_, vpls_.count, tilesX, tilesY, lists_, counts_);
-    f.ctx.launch(bin_, cl::NDRange::d1(cl::roundUp(tiles_, 16), 16), "splat: bin");
+    bin_.args(rects_, vpls_.count, tilesX, tilesY, sets, ordering, perSet, lists_, counts_);
+    f.ctx.launch(bin_, cl::NDRange::d1(cl::roundUp(tileSets_, 16), 16), "splat: bin");
     int vw = f.ctx.vectorWidth();
-    int n = p.getInt("splat.n"), m = p.getInt("splat.m");
-    int ordering = p.getChoice("splat.ordering") == "stride" ? 0 : 1;
-    bool interleaved = n * m > 1;
     size_t bytes = size_t(g.width) * g.height * 16;
     if (interleaved && (!irradiance_ || irradiance_.bytes() != bytes))
       irradiance_ = cl::Buffer(f.ctx, bytes, CL_MEM_READ_WRITE, "splat irradiance");
@@ -60,10 +65,10 @@ public:
       visibleShade_ = visibleProgram_.kernel("splat_shade");
     }
     cl::Kernel& shade = visibility_.enabled() ? visibleShade_ : shade_;
-    shade.args(g.width, g.height, tilesX, g.position, g.normal, g.albedo, vpls_.vpls, vpls_.count, eps, lists_,
-               counts_, n, m, ordering, interleaved ? irradiance_ : indirect);
-    visibility_.setArgs(shade, 15);
-    size_t gx = size_t(tilesX) * kTile / vw;
+    shade.args(g.width, g.height, tilesX, g.position, g.normal, g.albedo, vpls_.vpls, eps, lists_,
+               counts_, n, m, perSet, interleaved ? irradiance_ : indirect);
+    visibility_.setArgs(shade, 14);
+    size_t gx = size_t(tilesX) * n * (kTile / vw);  // per tile row: n pixel classes × kTile/vw lane chunks
     size_t lx = vw == 1 ? 16 : 1;
     f.ctx.launch(shade, cl::NDRange::d2(gx, size_t(tilesY) * kTile, lx, 16),
                  visibility_.enabled() ? "splat: shade + rays" : "splat: shade");
@@ -85,7 +90,8 @@ private:
   cl::Buffer rects_, lists_, counts_, irradiance_;
   std::unique_ptr<DiscontinuityFilter> filter_;
   VplSet vpls_;
-  int capacity_ = 0, tiles_ = 0;
+  int capacity_ = 0;
+  size_t listEntries_ = 0, tileSets_ = 0;
 };
 
 }  // namespace
