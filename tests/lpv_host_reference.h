@@ -60,6 +60,15 @@ inline std::array<glm::vec3, 6> axes() {
   return {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, -1, 0), glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)};
 }
 
+// f rounded to the nearest half-precision value (ties to even), for |f| <= 65504: the spacing of
+// halves is 2^(e − 10) for |f| in [2^e, 2^(e+1)), e >= −14, and 2^−24 below (subnormals).
+inline float roundToHalf(float f) {
+  int e = 0;
+  std::frexp(f, &e);  // |f| in [2^(e−1), 2^e)
+  float spacing = std::ldexp(1.0f, std::max(e - 1, -14) - 10);
+  return std::nearbyint(f / spacing) * spacing;
+}
+
 // One gather step from `src`; `geometry` (per node, may be empty) blocks when `blocking`.
 inline Grid propagate(const Grid& src, const std::vector<glm::vec4>& geometry, bool blocking) {
   Grid dst(src.n, src.cascades);
@@ -73,17 +82,18 @@ inline Grid propagate(const Grid& src, const std::vector<glm::vec4>& geometry, b
             if (!src.inside(nb)) continue;
             glm::vec4 g(0.0f);
             if (blocking) {
-              // Shared face between nb and c: average of its 4 corner nodes.
+              // Shared face between nb and c: average of its 4 corner nodes, summed in the
+              // kernel's order and stored in half precision as lpv_face_geometry does.
               int a = d.x != 0 ? 0 : d.y != 0 ? 1 : 2;
               glm::ivec3 corner = c;
               if (d[a] < 0) corner[a] += 1;
-              for (int u = 0; u < 2; ++u)
-                for (int v = 0; v < 2; ++v) {
-                  glm::ivec3 q = corner;
-                  q[(a + 1) % 3] += u;
-                  q[(a + 2) % 3] += v;
-                  g += 0.25f * geometry[nodeIndex(src.n, k, q)];
-                }
+              glm::ivec3 eu(0), ev(0);  // the face's in-plane axes, lower one first
+              eu[a == 0 ? 1 : 0] = 1;
+              ev[a == 2 ? 1 : 2] = 1;
+              glm::vec4 sum = geometry[nodeIndex(src.n, k, corner)] + geometry[nodeIndex(src.n, k, corner + eu)];
+              sum = sum + geometry[nodeIndex(src.n, k, corner + ev)];
+              sum = sum + geometry[nodeIndex(src.n, k, corner + eu + ev)];
+              for (int q = 0; q < 4; ++q) g[q] = roundToHalf(std::clamp(0.25f * sum[q], -65504.0f, 65504.0f));
             }
             for (const Face& f : facesFor(d)) {
               float w = f.solidAngle / kPi;

@@ -39,7 +39,7 @@
 //            right of a row stay inside the buffer;
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
 //   geometry float planes [cascade][coefficient][node]; geometryAcc long [cascade][source rsm, camera][node][4]
-//   faceGeometry float row blocks [cascade][z][y][axis][coefficient][x] (laid out like grid)
+//   faceGeometry half row blocks [cascade][z][y][axis][coefficient][x] (laid out like grid)
 //   lookupGrid float4 [cascade][channel][cell] (lpv_lookup_grid)
 //   cascades float4 [cascade]: (origin xyz of cell (0,0,0)'s corner, cell edge s), metres
 // The propagation works on LPV_LANES cells of a row per work-item, the injection and surfel
@@ -307,21 +307,25 @@ typedef int16 intL;
 #define vloadL vload16
 #define vstoreL vstore16
 #define LPV_LANE_IDS (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+#define vload_halfL vload_half16
 #elif LPV_LANES == 8
 typedef float8 floatL;
 typedef int8 intL;
 #define vloadL vload8
 #define vstoreL vstore8
 #define LPV_LANE_IDS (int8)(0, 1, 2, 3, 4, 5, 6, 7)
+#define vload_halfL vload_half8
 #elif LPV_LANES == 4
 typedef float4 floatL;
 typedef int4 intL;
 #define vloadL vload4
 #define vstoreL vstore4
 #define LPV_LANE_IDS (int4)(0, 1, 2, 3)
+#define vload_halfL vload_half4
 #else
 typedef float floatL;
 typedef int intL;
+#define vload_halfL vload_half
 #define vloadL(o, p) ((p)[o])
 #define vstoreL(v, o, p) ((p)[o] = (v))
 #define LPV_LANE_IDS 0
@@ -352,16 +356,21 @@ inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, i
 #define LPV_SIDE_SCALE 0.4472135955f  // 1/√5: ω = normalize(2·d ± e_b)
 // Blocking potential at each cell's 3 lower faces, once per frame (the geometry volume does not
 // change over the propagation steps): the mean of the 4 corner nodes of the face between cell
-// c − e_a and c. Plane p = a·4 + coefficient of the grids' row-block layout (LPV_AT).
+// c − e_a and c. Plane p = a·4 + coefficient of the grids' row-block layout (LPV_AT). Stored in
+// half precision (rounded to nearest, 11 significant bits: relative error <= 2.4e-4, far below the
+// approximation of a cell face's occluders by 4 SH coefficients), clamped to half's finite range:
+// the blocked step reads these 12 values per cell every step, and at 2 bytes each that stream is
+// half as long (tests/lpv_host_reference.h rounds the same way).
 // One work-item per (cell, axis, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
-kernel void lpv_face_geometry(global const float* geometry, global float* faceGeometry) {
+kernel void lpv_face_geometry(global const float* geometry, global half* faceGeometry) {
   size_t cell = get_global_id(0), a = get_global_id(1), k = get_global_id(2);
   int x = cell % LPV_N, y = (cell / LPV_N) % LPV_N, z = cell / (LPV_N * LPV_N);
   size_t n0 = (size_t)(z * LPV_M + y) * LPV_M + x;
   size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;  // the face's two in-plane axes
   for (int q = 0; q < 4; ++q) {
     global const float* plane = geometry + (k * 4 + q) * LPV_NODES + n0;
-    faceGeometry[LPV_PAD + LPV_AT(k, a * 4 + q, x, y, z)] = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
+    float mean = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
+    vstore_half_rte(clamp(mean, -65504.0f, 65504.0f), LPV_PAD + LPV_AT(k, a * 4 + q, x, y, z), faceGeometry);
   }
 }
 
@@ -443,7 +452,7 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, con
 #define LPV_ADD_SOURCE 2
 #define LPV_WRITE_LOOKUP 4
 inline void lpv_propagate_step(global const float* src, global float* dst, global float* accumulated,
-                               global const float* faceGeometry, int k, int accumulate, constant float4* cascades,
+                               global const half* faceGeometry, int k, int accumulate, constant float4* cascades,
                                global float4* lookupGrid, const bool blocking) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2);
   size_t row = LPV_PAD + LPV_AT(k, 0, x0, y, z);  // plane 0 of the work-item's first cell
@@ -465,11 +474,11 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
       // The shared face: the lower face along a of the cell itself (light along +a) or of the
       // cell above. For a y or z neighbour row outside the grid (its factors are not used) the
       // cell's own face is read in place of one that may lie past the buffer.
-      global const float* face =
+      global const half* face =
           faceGeometry + row + (dir / 2) * 4 * LPV_N + (inside[dir] && dir % 2 ? stride[dir / 2] : 0);
       floatL g[4];
 #pragma unroll
-      for (int q = 0; q < 4; ++q) g[q] = vloadL(0, face + q * LPV_N);
+      for (int q = 0; q < 4; ++q) g[q] = vload_halfL(0, face + q * LPV_N);
       lpv_transmittance(dir, g, maxMain, maxSide, t[dir]);
     } else {
       t[dir][0] = maxMain;
@@ -509,7 +518,7 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
 }
 
 kernel void lpv_propagate_blocked(global const float* src, global float* dst, global float* accumulated,
-                                  global const float* faceGeometry, int k, int accumulate,
+                                  global const half* faceGeometry, int k, int accumulate,
                                   constant float4* cascades, global float4* lookupGrid) {
   lpv_propagate_step(src, dst, accumulated, faceGeometry, k, accumulate, cascades, lookupGrid, true);
 }

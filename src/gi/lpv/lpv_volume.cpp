@@ -137,7 +137,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   ctx.fill(accumulated_, 0.0f);
   geometry_ = cl::Buffer(ctx, nodes * 16, CL_MEM_READ_WRITE, "lpv geometry volume");
   ctx.fill(geometry_, 0.0f);
-  faceGeometry_ = cl::Buffer(ctx, gridBytes, CL_MEM_READ_WRITE,
+  faceGeometry_ = cl::Buffer(ctx, gridFloats() * sizeof(uint16_t), CL_MEM_READ_WRITE,  // half precision
                              "lpv face blocking potential");
   ctx.fill(faceGeometry_, 0.0f);  // padding and skew stay 0
   lookupGrid_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv lookup grid");
