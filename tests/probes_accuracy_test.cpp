@@ -12,7 +12,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <algorithm>
+#include <cstdlib>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "accuracy_support.h"
 #include "metrics/metrics.h"
@@ -66,4 +70,35 @@ TEST(ProbesAccuracy, SponzaSmallFullImageSsim) {
               "target 0.85 not met), mean %.5f vs %.5f\n", ssim,
               meanOf(p.raster), meanOf(p.reference));
   EXPECT_GE(ssim, 0.72);
+}
+
+// What limits Sponza's SSIM (docs/results/probes.md): a manual measurement, DISABLED_ so ctest skips
+// it. Renders the SponzaSmallFullImageSsim configuration once per ';'-separated group of extra
+// parameter assignments (',' between assignments; an empty group = the test's configuration):
+//   GI_PROBES_SWEEP=";probes.backface_floor=0.4;probes.grid_x=16,probes.grid_y=8,probes.grid_z=16" \
+//   GI_MEDIA_DIR=../shared/scenes build/tests/gi_tests --gtest_also_run_disabled_tests \
+//     --gtest_filter='ProbesAccuracyDiagnosis.*'
+TEST(ProbesAccuracyDiagnosis, DISABLED_SponzaParameterSweep) {
+  std::string why;
+  std::optional<Scene> sponza = test::loadSponza(why);
+  if (!sponza) GTEST_SKIP() << why;
+  const Scene& s = *sponza;
+  const char* env = std::getenv("GI_PROBES_SWEEP");
+  const std::string all = env ? env : "";
+  for (size_t start = 0; start <= all.size();) {
+    size_t end = std::min(all.find(';', start), all.size());
+    std::string group = all.substr(start, end - start);
+    std::vector<std::string> sets = {"probes.update=static", "probes.rebuild_updates=8", "probes.rays=128",
+                                     "shadow.resolution=1024"};
+    for (size_t a = 0; a < group.size();) {
+      size_t b = std::min(group.find(',', a), group.size());
+      if (b > a) sets.push_back(group.substr(a, b - a));
+      a = b + 1;
+    }
+    test::AccuracyPair p = test::renderAgainstReference(s, "probes", 96, 54, sets, false, ReferenceMode::Full, false,
+                                                        "sponza_sun_full_96x54", 16);
+    std::printf("Sponza 96x54 probes [%s]: SSIM %.4f, mean %.5f vs %.5f\n", group.c_str(), displaySsim(p, s),
+                meanOf(p.raster), meanOf(p.reference));
+    start = end + 1;
+  }
 }
