@@ -308,6 +308,7 @@ typedef int16 intL;
 #define vstoreL vstore16
 #define LPV_LANE_IDS (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
 #define vload_halfL vload_half16
+#define vstore_halfL_rte vstore_half16_rte
 #elif LPV_LANES == 8
 typedef float8 floatL;
 typedef int8 intL;
@@ -315,6 +316,7 @@ typedef int8 intL;
 #define vstoreL vstore8
 #define LPV_LANE_IDS (int8)(0, 1, 2, 3, 4, 5, 6, 7)
 #define vload_halfL vload_half8
+#define vstore_halfL_rte vstore_half8_rte
 #elif LPV_LANES == 4
 typedef float4 floatL;
 typedef int4 intL;
@@ -322,10 +324,12 @@ typedef int4 intL;
 #define vstoreL vstore4
 #define LPV_LANE_IDS (int4)(0, 1, 2, 3)
 #define vload_halfL vload_half4
+#define vstore_halfL_rte vstore_half4_rte
 #else
 typedef float floatL;
 typedef int intL;
 #define vload_halfL vload_half
+#define vstore_halfL_rte vstore_half_rte
 #define vloadL(o, p) ((p)[o])
 #define vstoreL(v, o, p) ((p)[o] = (v))
 #define LPV_LANE_IDS 0
@@ -361,16 +365,17 @@ inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, i
 // approximation of a cell face's occluders by 4 SH coefficients), clamped to half's finite range:
 // the blocked step reads these 12 values per cell every step, and at 2 bytes each that stream is
 // half as long (tests/lpv_host_reference.h rounds the same way).
-// One work-item per (cell, axis, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
+// LPV_LANES cells of a row per work-item (contiguous node loads), global (N / LPV_LANES, N,
+// N · 3 · LPV_CASCADES) with z + N·(k·3 + a) along the third axis.
 kernel void lpv_face_geometry(global const float* geometry, global half* faceGeometry) {
-  size_t cell = get_global_id(0), a = get_global_id(1), k = get_global_id(2);
-  int x = cell % LPV_N, y = (cell / LPV_N) % LPV_N, z = cell / (LPV_N * LPV_N);
-  size_t n0 = (size_t)(z * LPV_M + y) * LPV_M + x;
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2) % LPV_N;
+  int slab = get_global_id(2) / LPV_N, k = slab / 3, a = slab % 3;  // slab = k·3 + axis
+  size_t n0 = (size_t)(z * LPV_M + y) * LPV_M + x0;
   size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;  // the face's two in-plane axes
   for (int q = 0; q < 4; ++q) {
     global const float* plane = geometry + (k * 4 + q) * LPV_NODES + n0;
-    float mean = 0.25f * (plane[0] + plane[u] + plane[v] + plane[u + v]);
-    vstore_half_rte(clamp(mean, -65504.0f, 65504.0f), LPV_PAD + LPV_AT(k, a * 4 + q, x, y, z), faceGeometry);
+    floatL mean = 0.25f * (vloadL(0, plane) + vloadL(0, plane + u) + vloadL(0, plane + v) + vloadL(0, plane + u + v));
+    vstore_halfL_rte(clamp(mean, -65504.0f, 65504.0f), 0, faceGeometry + LPV_PAD + LPV_AT(k, a * 4 + q, x0, y, z));
   }
 }
 

@@ -248,7 +248,8 @@ void LpvVolume::setGeometry(const std::vector<glm::vec4>& nodeValues) {
 void LpvVolume::propagate(int iterations, bool blocking) {
   if (blocking && iterations > 1) {
     faceGeometryKernel_.args(geometry_, faceGeometry_);
-    ctx_.launch(faceGeometryKernel_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: propagate");
+    ctx_.launch(faceGeometryKernel_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * 3 * cascades_),
+                "lpv: propagate");
   }
   // Cascade after cascade, all steps of one before the next: a step touches 6 MB per 32³ cascade
   // (two grids, the accumulated grid, the face potentials), which the last-level cache holds for
