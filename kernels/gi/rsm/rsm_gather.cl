@@ -108,6 +108,14 @@ kernel void rsm_pack(GiView view, global const float* position, global const flo
 inline floatV rsm_max(floatV a, floatV b) { return GI_SEL(b, a, a > b); }
 inline floatV rsm_min(floatV a, floatV b) { return GI_SEL(b, a, a < b); }
 
+// floor() lane-wise as one rounding instruction: PoCL's library floor() is a compare-and-blend
+// sequence on x86 (no vroundps); clang's element-wise builtin maps to llvm.floor.
+#if defined(__has_builtin) && __has_builtin(__builtin_elementwise_floor)
+#define RSM_FLOOR(x) __builtin_elementwise_floor(x)
+#else
+#define RSM_FLOOR(x) floor(x)
+#endif
+
 // GI_RSM_ROWS low-resolution rows per work-item, evaluated together sample by sample: pixels of
 // neighbouring rows project to neighbouring RSM texels, so the rows after the first mostly read
 // cache lines the first has just loaded. Each pixel's sum is independent of this choice.
@@ -174,8 +182,8 @@ inline void rsm_gather_rows(int width, int height, int lowWidth, int lowHeight, 
       float w = weights[s];
 #pragma unroll
       for (int r = 0; r < GI_RSM_ROWS; ++r) {
-        floatV fx = floor(rsm_min(rsm_max(sx[r] + o.x, loClamp), hiClamp));
-        floatV fy = floor(rsm_min(rsm_max(sy[r] + o.y, loClamp), hiClamp));
+        floatV fx = RSM_FLOOR(rsm_min(rsm_max(sx[r] + o.x, loClamp), hiClamp));
+        floatV fy = RSM_FLOOR(rsm_min(rsm_max(sy[r] + o.y, loClamp), hiClamp));
         uintV t = convert_uintV(convert_intV(fy) * pitch + convert_intV(fx) + (pitch + 1));
         intV w0, w1, w2, w3;
         GI_GATHER_AOS4(int, records, t, w0, w1, w2, w3)
