@@ -67,6 +67,16 @@ Scene boundsScene(glm::vec3 lo, glm::vec3 hi) {
 }
 
 // Random sparse level 0: a quarter of the voxels occupied, premultiplied radiance ≤ α.
+// Writes a level 0 built by a test and the occupancy bits of its non-zero voxels, as voxelize
+// leaves them (buildMips' contract: level 0 is zero wherever the bit is clear).
+void writeLevel0(cl::Context& ctx, VoxelScene& vs, const std::vector<glm::vec4>& level0) {
+  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  std::vector<uint32_t> bits(vs.voxelCount() / 32, 0u);
+  for (size_t v = 0; v < vs.voxelCount() && v < level0.size(); ++v)
+    if (level0[v] != glm::vec4(0.0f)) bits[v >> 5] |= 1u << (v & 31);
+  ctx.write(vs.occupancy(), bits.data(), bits.size() * 4);
+}
+
 std::vector<glm::vec4> randomLevel0(size_t n, uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
@@ -632,8 +642,14 @@ TEST(VctMips, IsotropicMeanOfChildrenConservesPremultipliedRadiance) {
   VoxelScene vs(ctx, s, 32);
   int N = 32, levels = vs.grid().levels;
   ASSERT_EQ(levels, 6);
+  // Sparse like a voxelized scene (buildMips' contract: level 0 is zero where the occupancy bit
+  // is clear): the upper half of the grid empty, every other voxel below it occupied at random,
+  // so that the level-1 pass meets both parents it must skip and parents it must sum.
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 5);
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  std::mt19937 pick(11);
+  for (size_t v = 0; v < level0.size(); ++v)
+    if (v / (size_t(N) * N) >= size_t(N / 2) || !(pick() & 1u)) level0[v] = glm::vec4(0.0f);
+  writeLevel0(ctx, vs, level0);
   vs.buildMips(false);
   std::vector<glm::vec4> iso = ctx.download<glm::vec4>(vs.iso());
   ctx.profiler().discard();
@@ -665,7 +681,7 @@ TEST(VctMips, AnisotropicCompositesFrontToBack) {
   VoxelScene vs(ctx, s, 32);
   int N = 32, levels = vs.grid().levels;
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 6);
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  writeLevel0(ctx, vs, level0);
   vs.buildMips(true);
   std::vector<glm::vec4> aniso = ctx.download<glm::vec4>(vs.aniso());
   ctx.profiler().discard();
@@ -681,7 +697,7 @@ TEST(VctMips, AnisotropicCompositesFrontToBack) {
   for (int z = 0; z < N; ++z)
     for (int y = 0; y < N; ++y)
       for (int x = 16; x < 18; ++x) wall[(size_t(z) * N + y) * N + x] = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);
-  ctx.write(vs.iso(), wall.data(), wall.size() * 16);
+  writeLevel0(ctx, vs, wall);
   vs.buildMips(true);
   aniso = ctx.download<glm::vec4>(vs.aniso());
   ctx.profiler().discard();
@@ -699,7 +715,7 @@ TEST(VctCone, EmptyGridAccumulatesNothingAndSolidWallSaturates) {
   VoxelScene vs(ctx, s, 32);
   int N = 32;
   std::vector<glm::vec4> grid(vs.voxelCount(), glm::vec4(0.0f));
-  ctx.write(vs.iso(), grid.data(), grid.size() * 16);
+  writeLevel0(ctx, vs, grid);
   vs.buildMips(false);
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
@@ -720,7 +736,7 @@ TEST(VctCone, EmptyGridAccumulatesNothingAndSolidWallSaturates) {
   for (int z = 0; z < N; ++z)
     for (int y = 0; y < N; ++y)
       for (int x = 16; x < 20; ++x) grid[(size_t(z) * N + y) * N + x] = glm::vec4(L, 1.0f);
-  ctx.write(vs.iso(), grid.data(), grid.size() * 16);
+  writeLevel0(ctx, vs, grid);
   float wideOpacity[2] = {0, 0};
   for (bool an : {false, true}) {
     vs.buildMips(an);
@@ -756,7 +772,7 @@ TEST(VctCone, MarchMatchesHostMirror) {
   h.levels = vs.grid().levels;
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 9);
   for (auto& v : level0) v *= 0.3f;  // keep cones from saturating in a step or two
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  writeLevel0(ctx, vs, level0);
   std::vector<glm::vec4> cones, dirs;
   randomCones(200, 4, cones, dirs);
   for (bool an : {false, true}) {
@@ -934,7 +950,7 @@ TEST(VctShVoxels, MipsMatchHostFilters) {
   int N = 32, levels = vs.grid().levels;
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 12);
   std::vector<glm::vec4> shLevel0 = randomShLevel0(level0, 13);
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  writeLevel0(ctx, vs, level0);
   ctx.fill(vs.accumulators(), 0u);
   vs.projectSh(ShLobe::Hemisphere);  // allocates; level 0 is then replaced by the random one
   ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
@@ -974,7 +990,7 @@ TEST(VctShVoxels, MarchMatchesHostMirror) {
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 14);
   for (auto& v : level0) v *= 0.3f;  // keep cones from saturating in a step or two
   std::vector<glm::vec4> shLevel0 = randomShLevel0(level0, 15);
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  writeLevel0(ctx, vs, level0);
   ctx.fill(vs.accumulators(), 0u);
   vs.projectSh(ShLobe::Hemisphere);  // allocates; level 0 is then replaced by the random one
   ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
@@ -1022,7 +1038,7 @@ TEST(VctShVoxels, WallLightsConesFromItsFrontOnly) {
   for (int z = 0; z < N; ++z)
     for (int y = 0; y < N; ++y)
       for (int x = 16; x < 20; ++x) level0[(size_t(z) * N + y) * N + x] = glm::vec4(L, 1.0f);
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  writeLevel0(ctx, vs, level0);
   ctx.fill(vs.accumulators(), 0u);
   vs.projectSh(ShLobe::Hemisphere);  // allocates; level 0 is then written below
   std::vector<glm::vec4> cones = {glm::vec4(4.0f, 16.0f, 16.0f, 0.05f), glm::vec4(4.0f, 16.0f, 16.0f, std::tan(float(M_PI) / 6))};
@@ -1088,7 +1104,7 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 21);
   for (auto& v : level0) v *= 0.3f;
   std::vector<glm::vec4> shLevel0 = randomShLevel0(level0, 22);
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  writeLevel0(ctx, vs, level0);
   ctx.fill(vs.accumulators(), 0u);
   vs.projectSh(ShLobe::Hemisphere);
   ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
@@ -1162,7 +1178,7 @@ TEST(VctCone, SpecularLanesMatchOneConeAtATime) {
   glm::vec3 origin(g.origin[0], g.origin[1], g.origin[2]);
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 31);
   for (auto& v : level0) v *= 0.3f;
-  ctx.write(vs.iso(), level0.data(), level0.size() * 16);
+  writeLevel0(ctx, vs, level0);
   vs.buildMips(true);
   const int W = 37, H = 5, count = W * H;
   GiView cam{};

@@ -176,6 +176,50 @@ kernel void vct_mip_isotropic(int N, int level, global float4* iso) {
   iso[vox_level_offset(N, level) + v] = sum * 0.125f;
 }
 
+// Level 1 from level 0 using the occupancy bits (bit v & 31 of word v >> 5 set for every voxel
+// the voxelization touched): level 0 is zero wherever its bit is clear (the injection, the bounce
+// and the clear write only listed voxels), so a parent without an occupied child is 0 and its 8
+// children need not be read — most of the 32 MB of level 0 at 128³. A work-item takes 16 parents
+// along x (n ≥ 16): their children span 32 voxels of each of the 4 child rows, one occupancy word
+// per row; per block of 4 parents (one byte of each word) either zero or the children's rows
+// loaded as float16 and summed in vct_mip_isotropic's child order k = 0 … 7 (the same bits).
+inline float16 vox_row_even(global const float4* r) {
+  float16 a = vload16(0, (global const float*)r), b = vload16(1, (global const float*)r);
+  return (float16)(a.s0123, a.s89ab, b.s0123, b.s89ab);
+}
+inline float16 vox_row_odd(global const float4* r) {
+  float16 a = vload16(0, (global const float*)r), b = vload16(1, (global const float*)r);
+  return (float16)(a.s4567, a.scdef, b.s4567, b.scdef);
+}
+kernel void vct_mip_isotropic_first(int N, global const uint* occupancy, global float4* iso) {
+  int n = N >> 1;
+  size_t v = 16 * get_global_id(0);  // the work-item's first parent
+  if (v >= (size_t)n * n * n) return;
+  int3 cell = vox_cell(v, n);
+  size_t first = ((size_t)(2 * cell.z) * N + 2 * cell.y) * N + 2 * cell.x;
+  size_t row = (size_t)N, slice = (size_t)N * N;
+  uint w00 = occupancy[first >> 5], w10 = occupancy[(first + row) >> 5], w01 = occupancy[(first + slice) >> 5],
+       w11 = occupancy[(first + slice + row) >> 5];
+  global float* out = (global float*)(iso + vox_level_offset(N, 1) + v);
+  for (int b = 0; b < 4; ++b) {
+    size_t c = first + 8 * b;
+    uint any = ((w00 | w10 | w01 | w11) >> (8 * b)) & 0xffu;
+    float16 sum = (float16)(0.0f);
+    if (any != 0u) {
+      sum += vox_row_even(iso + c);
+      sum += vox_row_odd(iso + c);
+      sum += vox_row_even(iso + c + row);
+      sum += vox_row_odd(iso + c + row);
+      sum += vox_row_even(iso + c + slice);
+      sum += vox_row_odd(iso + c + slice);
+      sum += vox_row_even(iso + c + slice + row);
+      sum += vox_row_odd(iso + c + slice + row);
+      sum *= 0.125f;
+    }
+    vstore16(sum, b, out);
+  }
+}
+
 // Column (i, j) of a parent's 2×2×2 children seen along direction dir (0..5 = +x, −x, +y, −y, +z,
 // −z): the front and back child's index in the child volume of edge nc; b = 2 × the parent's cell.
 inline void vox_column(int dir, int i, int j, int3 b, int nc, size_t* front, size_t* back) {

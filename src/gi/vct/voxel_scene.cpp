@@ -64,6 +64,7 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   injectLanes_ = cl::gatherVectorWidth(ctx);
   inject_ = lightProgram_.kernel("vct_inject");
   mipIso_ = lightProgram_.kernel("vct_mip_isotropic");
+  mipIsoFirst_ = lightProgram_.kernel("vct_mip_isotropic_first");
   mipAnisoFirst_ = lightProgram_.kernel("vct_mip_anisotropic_first");
   mipAniso_ = lightProgram_.kernel("vct_mip_anisotropic");
   shProject_ = lightProgram_.kernel("vct_sh_project");
@@ -131,6 +132,11 @@ void VoxelScene::buildMips(bool anisotropic) {
     } else if (anisotropic) {
       mipAniso_.args(N, l, aniso_);
       ctx_.launch(mipAniso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (anisotropic)");
+    } else if (l == 1 && injectLanes_ > 1 && N >= 32) {
+      // CPU: parents without an occupied child written as 0 without reading level 0 (which is 0
+      // wherever the occupancy bit is clear: buildMips' contract, voxel_scene.h).
+      mipIsoFirst_.args(N, occupancy_, iso_);
+      ctx_.launch(mipIsoFirst_, cl::NDRange::d1(cl::roundUp(cells / 16, 16), 16), "vct: mips (isotropic)");
     } else {
       mipIso_.args(N, l, iso_);
       ctx_.launch(mipIso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (isotropic)");

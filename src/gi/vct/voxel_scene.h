@@ -44,6 +44,8 @@ public:
   // lights and shadow maps; the other voxels stay zero.
   void inject(const DeviceScene& scene, const ShadowMapSet& shadows);
   // Levels 1 … log2 N from level 0: isotropic (`iso`) or 6 directional volumes (`aniso`).
+  // Level 0 must be zero wherever the occupancy bit is clear (as voxelize/inject/clear leave it):
+  // the isotropic level 1 skips the children of parents without an occupied child.
   void buildMips(bool anisotropic);
   // SH voxels (vct.voxels=sh): level 0 from the radiance chain's level 0 and the voxels' normals,
   // then the same mips on the coefficients. Needs buildMips(anisotropic) first (opacity).
@@ -53,6 +55,7 @@ public:
 
   const cl::Buffer& accumulators() const { return acc_; }  // GI_VOX_RECORD words per voxel (voxel_types.h)
   cl::Buffer& iso() { return iso_; }      // float4 per voxel, all isotropic levels (voxel_grid.h)
+  cl::Buffer& occupancy() { return occupancy_; }  // bit v & 31 of word v >> 5: voxel v voxelized
   cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (allocated on first use)
   cl::Buffer& sh() { return sh_; }            // 3 float4 per voxel of iso (allocated on first use)
   cl::Buffer& shAniso() { return shAniso_; }  // 3 float4 per voxel of aniso (allocated on first use)
@@ -71,7 +74,7 @@ private:
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
   int injectLanes_ = 1;  // GI_VW of lightProgram_ (occupied voxels per vct_inject work-item)
-  cl::Kernel clear_, occupancyCount_, occupancyScan_, occupancyList_, voxelize_, inject_, mipIso_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
+  cl::Kernel clear_, occupancyCount_, occupancyScan_, occupancyList_, voxelize_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
   // occupied_: the voxels the last voxelization touched (count in occupiedCount_), in increasing
   // order, built from their bits in occupancy_ (1 bit per voxel) through per-span counts.
   static constexpr uint64_t kOccupancySpanVoxels = 64 * 32;  // GI_VOX_SPAN_WORDS words (voxelize.cl)
