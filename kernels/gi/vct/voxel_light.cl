@@ -183,13 +183,12 @@ kernel void vct_mip_isotropic(int N, int level, global float4* iso) {
 // along x (n ≥ 16): their children span 32 voxels of each of the 4 child rows, one occupancy word
 // per row; per block of 4 parents (one byte of each word) either zero or the children's rows
 // loaded as float16 and summed in vct_mip_isotropic's child order k = 0 … 7 (the same bits).
-inline float16 vox_row_even(global const float4* r) {
+// 8 consecutive children of a row, loaded once: the even ones (x = 0, 2, 4, 6) and the odd ones,
+// one per parent, as the 4 float4 of a float16.
+inline void vox_row_children(global const float4* r, float16* even, float16* odd) {
   float16 a = vload16(0, (global const float*)r), b = vload16(1, (global const float*)r);
-  return (float16)(a.s0123, a.s89ab, b.s0123, b.s89ab);
-}
-inline float16 vox_row_odd(global const float4* r) {
-  float16 a = vload16(0, (global const float*)r), b = vload16(1, (global const float*)r);
-  return (float16)(a.s4567, a.scdef, b.s4567, b.scdef);
+  *even = (float16)(a.s0123, a.s89ab, b.s0123, b.s89ab);
+  *odd = (float16)(a.s4567, a.scdef, b.s4567, b.scdef);
 }
 kernel void vct_mip_isotropic_first(int N, global const uint* occupancy, global float4* iso) {
   int n = N >> 1;
@@ -206,14 +205,14 @@ kernel void vct_mip_isotropic_first(int N, global const uint* occupancy, global 
     uint any = ((w00 | w10 | w01 | w11) >> (8 * b)) & 0xffu;
     float16 sum = (float16)(0.0f);
     if (any != 0u) {
-      sum += vox_row_even(iso + c);
-      sum += vox_row_odd(iso + c);
-      sum += vox_row_even(iso + c + row);
-      sum += vox_row_odd(iso + c + row);
-      sum += vox_row_even(iso + c + slice);
-      sum += vox_row_odd(iso + c + slice);
-      sum += vox_row_even(iso + c + slice + row);
-      sum += vox_row_odd(iso + c + slice + row);
+      const size_t rows[4] = {c, c + row, c + slice, c + slice + row};  // children k = 0–1, 2–3, 4–5, 6–7
+#pragma unroll
+      for (int r = 0; r < 4; ++r) {
+        float16 even, odd;
+        vox_row_children(iso + rows[r], &even, &odd);
+        sum += even;
+        sum += odd;
+      }
       sum *= 0.125f;
     }
     vstore16(sum, b, out);
