@@ -179,6 +179,14 @@ inline intV filterAccepts(float (*q)[GI_FILTER_SPAN], int o, floatV z, floatV tz
   return ok;
 }
 
+// Adds neighbour E (r, g, b) and weight 1 to the sums of the lanes that accept it.
+inline void filterAccumulate(intV ok, floatV r, floatV g, floatV b, floatV* sr, floatV* sg, floatV* sb, floatV* ws) {
+  *sr += select((floatV)(0.0f), r, ok);
+  *sg += select((floatV)(0.0f), g, ok);
+  *sb += select((floatV)(0.0f), b, ok);
+  *ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
+}
+
 // Same test, same summation order (dy outer, dx inner) as the host mirror in the tests.
 kernel void discontinuity_filter(int width, int height, global const float* irradiance, global const float* depth,
                                  global const float* geoNormal, global const uint* instance,
@@ -203,11 +211,8 @@ kernel void discontinuity_filter(int width, int height, global const float* irra
 #pragma unroll
     for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
       int o = GI_FILTER_APRON + dx;
-      intV ok = filterAccepts(c, o, z, tz, nx, ny, nz, id, cosTauN);
-      sr += select((floatV)(0.0f), vloadV(0, c[0] + o), ok);
-      sg += select((floatV)(0.0f), vloadV(0, c[1] + o), ok);
-      sb += select((floatV)(0.0f), vloadV(0, c[2] + o), ok);
-      ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
+      filterAccumulate(filterAccepts(c, o, z, tz, nx, ny, nz, id, cosTauN), vloadV(0, c[0] + o), vloadV(0, c[1] + o),
+                       vloadV(0, c[2] + o), &sr, &sg, &sb, &ws);
     }
     intV accepted = ws > 0.0f;
     floatV wdiv = select((floatV)(1.0f), ws, accepted);
@@ -236,11 +241,9 @@ kernel void discontinuity_filter(int width, int height, global const float* irra
     // Column pass over the row-filtered E, tested against this pixel.
 #pragma unroll
     for (int dy = 0; dy < GI_FY; ++dy) {
-      intV ok = filterAccepts(rows[r + dy], GI_FILTER_APRON, z, tz, nx, ny, nz, id, cosTauN);
-      sr += select((floatV)(0.0f), vloadV(0, rowE[r + dy][0]), ok);
-      sg += select((floatV)(0.0f), vloadV(0, rowE[r + dy][1]), ok);
-      sb += select((floatV)(0.0f), vloadV(0, rowE[r + dy][2]), ok);
-      ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
+      filterAccumulate(filterAccepts(rows[r + dy], GI_FILTER_APRON, z, tz, nx, ny, nz, id, cosTauN),
+                       vloadV(0, rowE[r + dy][0]), vloadV(0, rowE[r + dy][1]), vloadV(0, rowE[r + dy][2]), &sr, &sg,
+                       &sb, &ws);
     }
     floatV ownR = vloadV(0, rowE[r + GI_FY / 2][0]), ownG = vloadV(0, rowE[r + GI_FY / 2][1]),
            ownB = vloadV(0, rowE[r + GI_FY / 2][2]);
@@ -251,11 +254,8 @@ kernel void discontinuity_filter(int width, int height, global const float* irra
 #pragma unroll
       for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
         int o = GI_FILTER_APRON + dx;
-        intV ok = filterAccepts(q, o, z, tz, nx, ny, nz, id, cosTauN);
-        sr += select((floatV)(0.0f), vloadV(0, q[0] + o), ok);
-        sg += select((floatV)(0.0f), vloadV(0, q[1] + o), ok);
-        sb += select((floatV)(0.0f), vloadV(0, q[2] + o), ok);
-        ws += select((floatV)(0.0f), (floatV)(1.0f), ok);
+        filterAccumulate(filterAccepts(q, o, z, tz, nx, ny, nz, id, cosTauN), vloadV(0, q[0] + o), vloadV(0, q[1] + o),
+                         vloadV(0, q[2] + o), &sr, &sg, &sb, &ws);
       }
     }
     floatV ownR = vloadV(0, own[0] + GI_FILTER_APRON), ownG = vloadV(0, own[1] + GI_FILTER_APRON),
