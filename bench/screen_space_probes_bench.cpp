@@ -166,6 +166,14 @@ int main(int argc, char** argv) {
                    [&] { field.update(r.deviceScene(), 0.97f); });
       cl::Buffer out(ctx, size_t(a.width) * a.height * 16);
       printCpuTime(ctx, "probes: shade, full resolution", calls, [&] { field.shade(r.gbuffer(), out); });
+      // probes.downsample=2: shading on every second pixel in x and y + geometry-aware upsampling.
+      ProbeSettings half;
+      half.downsample = 2;
+      ProbeField halfField(ctx, scene, r.deviceScene(), half);
+      halfField.relocate(r.deviceScene(), 4);
+      for (int i = 0; i < 4; ++i) halfField.update(r.deviceScene(), 0.97f);
+      printCpuTime(ctx, "probes: shade, half resolution + upsample", calls,
+                   [&] { halfField.shade(r.gbuffer(), out); });
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

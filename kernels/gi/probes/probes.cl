@@ -243,7 +243,7 @@ kernel void probe_relocate(GiProbeGrid grid, global const float4* rayDirs, globa
 // (mean, mean², mean, mean²) and one for the probe's state: 7 loads per probe instead of 20
 // scalar gathers. The octahedral footprint of the normal is the same for the 8 probes and is
 // computed once.
-inline void probe_octahedral_footprintV(floatV dx, floatV dy, floatV dz, int res, intV* offset, floatV* tx,
+__attribute__((always_inline)) inline void probe_octahedral_footprintV(floatV dx, floatV dy, floatV dz, int res, intV* offset, floatV* tx,
                                         floatV* ty) {
   floatV inv = 1.0f / (fabs(dx) + fabs(dy) + fabs(dz));
   floatV px = dx * inv, py = dy * inv;
@@ -261,7 +261,7 @@ inline void probe_octahedral_footprintV(floatV dx, floatV dy, floatV dz, int res
 }
 
 // Bilinear irradiance of float4 texels i00, i00 + 1, i00 + side, i00 + side + 1.
-inline float3V probe_irradiance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty) {
+__attribute__((always_inline)) inline float3V probe_irradiance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty) {
   floatV ar, ag, ab, br, bg, bb, cr, cg, cb, dr, dg, db, unused;
   GI_GATHER_AOS4(float, map, i00, ar, ag, ab, unused)
   GI_GATHER_AOS4(float, map, i00 + 1, br, bg, bb, unused)
@@ -272,7 +272,7 @@ inline float3V probe_irradiance_bilerpV(global const float* map, intV i00, int s
 }
 
 // Bilinear (mean, mean²) of float2 texels i00 … i00 + side + 1: a row's two taps are one record.
-inline void probe_distance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty, floatV* mean,
+__attribute__((always_inline)) inline void probe_distance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty, floatV* mean,
                                    floatV* mean2) {
   floatV am, am2, bm, bm2, cm, cm2, dm, dm2;
   GI_GATHER_SPAN4(float, map, i00 * 2, am, am2, bm, bm2)
@@ -281,62 +281,109 @@ inline void probe_distance_bilerpV(global const float* map, intV i00, int side, 
   *mean2 = mix(mix(am2, bm2, tx), mix(cm2, dm2, tx), ty);
 }
 
-inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float* irradiance,
+// What the 8 probes of a pixel share: the biased point xb, the normal's irradiance footprint
+// (texel offset and bilinear weights) and the running sums.
+typedef struct {
+  float3V x, n, xb;
+  intV irrOffset;
+  floatV itx, ity;
+  floatV Ex, Ey, Ez, wsum;
+} ProbeBlendV;
+
+// Adds one probe's weighted irradiance: trilinear weight w (times the probe's active flag), the
+// probe's relocated position pp, its irradiance map irrMap with the lanes' texel indices irrIndex
+// (the normal's footprint) and its distance map distMap with the lanes' texel offsets distBase
+// added to the direction's footprint. The uniform-cell path passes one probe's maps with shared
+// lane indices, the general path the map arrays with per-lane probe offsets.
+__attribute__((always_inline)) inline void probe_accumulateV(const GiProbeGrid* g, ProbeBlendV* b, floatV w,
+                                                              floatV ppx, floatV ppy, floatV ppz,
+                                                              global const float* irrMap, intV irrIndex,
+                                                              global const float* distMap, intV distBase) {
+  int dres = g->distance_res, dside = dres + 2, iside = g->irradiance_res + 2;
+  floatV tpx = ppx - b->x.x, tpy = ppy - b->x.y, tpz = ppz - b->x.z;
+  floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
+  w *= GI_SEL((floatV)(1.0f), fmax(g->backface_floor, (b->n.x * tpx + b->n.y * tpy + b->n.z * tpz) / len),
+              len > 0.0f);
+  floatV fpx = b->xb.x - ppx, fpy = b->xb.y - ppy, fpz = b->xb.z - ppz;
+  floatV r = sqrt(fpx * fpx + fpy * fpy + fpz * fpz);
+  intV far = r > 0.0f;
+  intV distOffset;
+  floatV dtx, dty, mean, mean2;
+  probe_octahedral_footprintV(GI_SEL(b->n.x, fpx, far), GI_SEL(b->n.y, fpy, far), GI_SEL(b->n.z, fpz, far), dres,
+                              &distOffset, &dtx, &dty);
+  probe_distance_bilerpV(distMap, distBase + distOffset, dside, dtx, dty, &mean, &mean2);
+  floatV variance = fabs(mean2 - mean * mean), d = r - mean;
+  floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
+#pragma unroll
+  for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
+  w *= GI_SEL((floatV)(1.0f), v, r > mean);
+  float3V e = probe_irradiance_bilerpV(irrMap, irrIndex, iside, b->itx, b->ity);
+  b->Ex += w * e.x;
+  b->Ey += w * e.y;
+  b->Ez += w * e.z;
+  b->wsum += w;
+}
+
+__attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float* irradiance,
                                        global const float* distance, global const float* probeStates, float3V x,
                                        float3V n, float3V ng, float3V wo) {
   int cx = g->count[0], cy = g->count[1], cz = g->count[2];
   float sx = g->spacing[0], sy = g->spacing[1], sz = g->spacing[2];
   float ox = g->origin[0], oy = g->origin[1], oz = g->origin[2];
-  floatV xbx = x.x + ng.x * g->normal_bias + wo.x * g->view_bias;
-  floatV xby = x.y + ng.y * g->normal_bias + wo.y * g->view_bias;
-  floatV xbz = x.z + ng.z * g->normal_bias + wo.z * g->view_bias;
-  floatV rx = (xbx - ox) / sx, ry = (xby - oy) / sy, rz = (xbz - oz) / sz;
+  ProbeBlendV b;
+  b.x = x;
+  b.n = n;
+  b.xb = f3v(x.x + ng.x * g->normal_bias + wo.x * g->view_bias, x.y + ng.y * g->normal_bias + wo.y * g->view_bias,
+             x.z + ng.z * g->normal_bias + wo.z * g->view_bias);
+  floatV rx = (b.xb.x - ox) / sx, ry = (b.xb.y - oy) / sy, rz = (b.xb.z - oz) / sz;
   intV bx = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rx), rx == rx)), 0, max(cx - 2, 0));
   intV by = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(ry), ry == ry)), 0, max(cy - 2, 0));
   intV bz = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rz), rz == rz)), 0, max(cz - 2, 0));
   floatV ax = clamp(rx - convert_floatV(bx), 0.0f, 1.0f), ay = clamp(ry - convert_floatV(by), 0.0f, 1.0f),
          az = clamp(rz - convert_floatV(bz), 0.0f, 1.0f);
-  int ires = g->irradiance_res, iside = ires + 2, dres = g->distance_res, dside = dres + 2;
-  intV irrOffset;
-  floatV itx, ity;
-  probe_octahedral_footprintV(n.x, n.y, n.z, ires, &irrOffset, &itx, &ity);
+  int ires = g->irradiance_res, iside = ires + 2, dside = g->distance_res + 2;
+  int irrTexels = iside * iside, distTexels = dside * dside;
+  probe_octahedral_footprintV(n.x, n.y, n.z, ires, &b.irrOffset, &b.itx, &b.ity);
   floatV zero = (floatV)(0.0f);
-  floatV Ex = zero, Ey = zero, Ez = zero, wsum = zero;
+  b.Ex = b.Ey = b.Ez = b.wsum = zero;
+#if GI_VW > 1
+  // Most work-items' pixels lie in one probe cell (adjacent pixels of a row): then the 8 probes,
+  // their states and positions are the same for all lanes (scalar loads, broadcast), and the
+  // irradiance taps of every probe are at the same lane offsets from that probe's map, whose lane
+  // indices are extracted once instead of once per probe. Same formulas, same results.
+  int ux = bx.s0, uy = by.s0, uz = bz.s0;
+  if (GI_ALL((bx == ux) & (by == uy) & (bz == uz))) {
 #pragma unroll
-  for (int c = 0; c < 8; ++c) {
-    int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
-    floatV w = (offx ? ax : 1.0f - ax) * (offy ? ay : 1.0f - ay) * (offz ? az : 1.0f - az);
-    intV pix = min(bx + offx, cx - 1), piy = min(by + offy, cy - 1), piz = min(bz + offz, cz - 1);
-    intV probe = (piz * cy + piy) * cx + pix;
-    floatV movedX, movedY, movedZ, active;  // the probe's state: relocation offset, active flag
-    GI_GATHER_AOS4(float, probeStates, probe, movedX, movedY, movedZ, active)
-    w *= active;
-    floatV ppx = ox + convert_floatV(pix) * sx + movedX, ppy = oy + convert_floatV(piy) * sy + movedY,
-           ppz = oz + convert_floatV(piz) * sz + movedZ;
-    floatV tpx = ppx - x.x, tpy = ppy - x.y, tpz = ppz - x.z;
-    floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
-    w *= GI_SEL((floatV)(1.0f), fmax(g->backface_floor, (n.x * tpx + n.y * tpy + n.z * tpz) / len), len > 0.0f);
-    floatV fpx = xbx - ppx, fpy = xby - ppy, fpz = xbz - ppz;
-    floatV r = sqrt(fpx * fpx + fpy * fpy + fpz * fpz);
-    intV far = r > 0.0f;
-    intV distOffset;
-    floatV dtx, dty, mean, mean2;
-    probe_octahedral_footprintV(GI_SEL(n.x, fpx, far), GI_SEL(n.y, fpy, far), GI_SEL(n.z, fpz, far), dres,
-                                &distOffset, &dtx, &dty);
-    probe_distance_bilerpV(distance, probe * (dside * dside) + distOffset, dside, dtx, dty, &mean, &mean2);
-    floatV variance = fabs(mean2 - mean * mean), d = r - mean;
-    floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
+    for (int c = 0; c < 8; ++c) {
+      int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
+      floatV w = (offx ? ax : 1.0f - ax) * (offy ? ay : 1.0f - ay) * (offz ? az : 1.0f - az);
+      int pix = min(ux + offx, cx - 1), piy = min(uy + offy, cy - 1), piz = min(uz + offz, cz - 1);
+      int probe = (piz * cy + piy) * cx + pix;
+      float4 state = vload4(probe, probeStates);  // relocation offset, active flag
+      w *= state.w;
+      probe_accumulateV(g, &b, w, (floatV)(ox + (float)pix * sx + state.x), (floatV)(oy + (float)piy * sy + state.y),
+                        (floatV)(oz + (float)piz * sz + state.z), irradiance + (size_t)probe * irrTexels * 4,
+                        b.irrOffset, distance + (size_t)probe * distTexels * 2, (intV)(0));
+    }
+  } else
+#endif
+  {
 #pragma unroll
-    for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
-    w *= GI_SEL((floatV)(1.0f), v, r > mean);
-    float3V e = probe_irradiance_bilerpV(irradiance, probe * (iside * iside) + irrOffset, iside, itx, ity);
-    Ex += w * e.x;
-    Ey += w * e.y;
-    Ez += w * e.z;
-    wsum += w;
+    for (int c = 0; c < 8; ++c) {
+      int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
+      floatV w = (offx ? ax : 1.0f - ax) * (offy ? ay : 1.0f - ay) * (offz ? az : 1.0f - az);
+      intV pix = min(bx + offx, cx - 1), piy = min(by + offy, cy - 1), piz = min(bz + offz, cz - 1);
+      intV probe = (piz * cy + piy) * cx + pix;
+      floatV movedX, movedY, movedZ, active;  // the probe's state: relocation offset, active flag
+      GI_GATHER_AOS4(float, probeStates, probe, movedX, movedY, movedZ, active)
+      w *= active;
+      probe_accumulateV(g, &b, w, ox + convert_floatV(pix) * sx + movedX, oy + convert_floatV(piy) * sy + movedY,
+                        oz + convert_floatV(piz) * sz + movedZ, irradiance, probe * irrTexels + b.irrOffset, distance,
+                        probe * distTexels);
+    }
   }
-  floatV inv = GI_SEL(zero, 1.0f / wsum, wsum > 0.0f);
-  return f3v(Ex * inv, Ey * inv, Ez * inv);
+  floatV inv = GI_SEL(zero, 1.0f / b.wsum, b.wsum > 0.0f);
+  return f3v(b.Ex * inv, b.Ey * inv, b.Ez * inv);
 }
 
 // One work-item: GI_VW adjacent pixels (u, v) of a (⌈W/down⌉ × ⌈H/down⌉) image, pixel (u, v)
