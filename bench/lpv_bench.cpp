@@ -11,7 +11,8 @@
 //   far light travels: the on-axis irradiance above one cosine-lobe cell in an empty grid after
 //   `resolution` iterations, against the exact Φ/(π r²) of that emitter, at 32³, 64³ and 128³;
 //   --propagation only times the propagation of one 16³ and one 32³ grid of random light and
-//   blockers: device ms and process CPU ms per step, median of --frames runs of `resolution` steps;
+//   blockers: device ms and process CPU ms per step, median and least of --frames runs of
+//   `resolution` steps;
 //   --config I times only the I-th configuration of the list below, 0-based; --passes times the
 //   propagation and/or the lookup alone, repeated on one rendered frame: timePasses)
 #include <sys/resource.h>
@@ -89,8 +90,9 @@ void timePropagation(cl::Context& ctx, int n, int runs) {
       device.push_back(ms / n);
       cpu.push_back((c1 - c0) / n);
     }
-    std::printf("  %d^3, %d steps, blocking %s: %.3f ms per step on the device, %.3f ms CPU per step\n", n, n,
-                blocking ? "on " : "off", timing::median(device), timing::median(cpu));
+    std::printf("  %d^3, %d steps, blocking %s: %.3f ms per step on the device, %.3f ms CPU per step (least: %.3f, %.3f)\n",
+                n, n, blocking ? "on " : "off", timing::median(device), timing::median(cpu),
+                *std::min_element(device.begin(), device.end()), *std::min_element(cpu.begin(), cpu.end()));
   }
 }
 

@@ -34,7 +34,8 @@
 //
 // Layouts (N = LPV_N, cells (z·N + y)·N + x, nodes the same with N + 1):
 //   grid     float row blocks [cascade][z][y][channel r,g,b][coefficient][x] (LPV_AT): SH
-//            coefficients of intensity (sh.h order), after LPV_PAD floats of padding, each z slice
+//            coefficients of intensity (sh.h order) in grid units (LPV_UNIT0/1 below: each
+//            coefficient times its basis constant), after LPV_PAD floats of padding, each z slice
 //            followed by LPV_SKEW floats (zero), so the propagation's row loads one cell left or
 //            right of a row stay inside the buffer;
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
@@ -69,6 +70,14 @@
 // Solid angles of the destination cell's faces seen from the neighbour's centre (ALGORITHMS.md §4).
 #define LPV_MAIN_FACE_SOLID_ANGLE 0.4006696846f
 #define LPV_SIDE_FACE_SOLID_ANGLE 0.4234413544f
+#define LPV_SIDE_SCALE 0.4472135955f  // 1/√5: ω = normalize(2·d ± e_b), the direction to a side face
+// Grid units: the grids hold c0·LPV_UNIT0 and c_i·LPV_UNIT1 (i = y, z, x) for the SH coefficients
+// c of intensity, i.e. the terms of I(ω) = Y0·c0 + Y1·(c·ω) pre-multiplied by the constants the
+// propagation evaluates them with (side faces: Y1/√5): a face's intensity is then adds and one
+// fused multiply-add, 3 multiplies fewer per neighbour and channel. The host converts
+// (LpvVolume::readGrid, setInjected); the lookup grid is in plain irradiance coefficients.
+#define LPV_UNIT0 GI_SH_Y0
+#define LPV_UNIT1 (GI_SH_Y1 * LPV_SIDE_SCALE)
 
 inline int cell_index(int3 c) { return (c.z * LPV_N + c.y) * LPV_N + c.x; }
 
@@ -80,6 +89,41 @@ inline void atomic_add_fixed4(global long* acc, long4 v) {
   if (v.z != 0) atom_add(acc + 2, v.z);
   if (v.w != 0) atom_add(acc + 3, v.w);
 }
+
+// LPV_LANES cells of a row as one vector (the propagation, the resolve and grid conversions).
+#if LPV_LANES == 16
+typedef float16 floatL;
+typedef int16 intL;
+#define vloadL vload16
+#define vstoreL vstore16
+#define LPV_LANE_IDS (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+#define vload_halfL vload_half16
+#define vstore_halfL_rte vstore_half16_rte
+#elif LPV_LANES == 8
+typedef float8 floatL;
+typedef int8 intL;
+#define vloadL vload8
+#define vstoreL vstore8
+#define LPV_LANE_IDS (int8)(0, 1, 2, 3, 4, 5, 6, 7)
+#define vload_halfL vload_half8
+#define vstore_halfL_rte vstore_half8_rte
+#elif LPV_LANES == 4
+typedef float4 floatL;
+typedef int4 intL;
+#define vloadL vload4
+#define vstoreL vstore4
+#define LPV_LANE_IDS (int4)(0, 1, 2, 3)
+#define vload_halfL vload_half4
+#define vstore_halfL_rte vstore_half4_rte
+#else
+typedef float floatL;
+typedef int intL;
+#define vload_halfL vload_half
+#define vstore_halfL_rte vstore_half_rte
+#define vloadL(o, p) ((p)[o])
+#define vstoreL(v, o, p) ((p)[o] = (v))
+#define LPV_LANE_IDS 0
+#endif
 
 // ---- injection --------------------------------------------------------------------------------
 
@@ -263,30 +307,74 @@ kernel void lpv_geometry_camera(GiView view, global const float4* position, glob
 
 // ---- resolve ----------------------------------------------------------------------------------
 
-// One work-item per (cell, channel, cascade): global (LPV_CELLS, 3, LPV_CASCADES).
+// Fixed-point sums to float, rounded to nearest as convert_float4 rounds: 2^52 + 2^51 + v is a
+// double whose mantissa holds v exactly (for |v| < 2^51: the injection sums stay below 2^48 by
+// construction of their scale, the geometry sums below 2^51 while a node's blocking potential
+// stays below 2048), then one rounding to float. AVX2 has no packed 64-bit integer conversion:
+// convert_float4 of a long4 compiled to 4 scalar conversions, which made the resolve the slowest
+// of the per-frame passes for 3 cascades.
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+inline float4 lpv_fixed_to_float4(long4 v) {
+  return convert_float4(as_double4(v + 0x4338000000000000L) - 6755399441055744.0);  // bits of 2^52 + 2^51
+}
+#else
+inline float4 lpv_fixed_to_float4(long4 v) { return convert_float4(v); }
+#endif
+
+// LPV_LANES cells of a row and one channel per work-item, global (N / LPV_LANES, N, N · 3 ·
+// LPV_CASCADES) with z + N·(k·3 + ch) along the third axis: the cells' fixed-point sums (one
+// contiguous block) become 4 coefficient rows of the grid, in grid units.
 kernel void lpv_resolve_injection(global const long* gridAcc, float invFixedScale, global float* grid,
                                   global float* accumulated) {
-  size_t cell = get_global_id(0), ch = get_global_id(1), k = get_global_id(2);
-  float4 v = convert_float4(vload4((k * 3 + ch) * LPV_CELLS + cell, gridAcc)) * invFixedScale;
-  size_t at = LPV_PAD + LPV_AT(k, ch * 4, cell % LPV_N, (cell / LPV_N) % LPV_N, cell / (LPV_N * LPV_N));
-  for (int coef = 0; coef < 4; ++coef) {
-    float c = coef == 0 ? v.x : coef == 1 ? v.y : coef == 2 ? v.z : v.w;
-    grid[at + coef * LPV_N] = c;
-    accumulated[at + coef * LPV_N] = c;
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2) % LPV_N;
+  int slab = get_global_id(2) / LPV_N, k = slab / 3, ch = slab % 3;  // slab = k·3 + ch
+  global const long* sums = gridAcc + ((size_t)slab * LPV_CELLS + (z * LPV_N + y) * LPV_N + x0) * 4;
+  const float4 scale = invFixedScale * (float4)(LPV_UNIT0, LPV_UNIT1, LPV_UNIT1, LPV_UNIT1);  // grid units
+  float c[4][LPV_LANES];
+#pragma unroll
+  for (int l = 0; l < LPV_LANES; ++l) {
+    float4 v = lpv_fixed_to_float4(vload4(l, sums)) * scale;
+    c[0][l] = v.x;
+    c[1][l] = v.y;
+    c[2][l] = v.z;
+    c[3][l] = v.w;
+  }
+  size_t at = LPV_PAD + LPV_AT(k, ch * 4, x0, y, z);
+#pragma unroll
+  for (int q = 0; q < 4; ++q) {
+    floatL v = vloadL(0, c[q]);
+    vstoreL(v, 0, grid + at + q * LPV_N);
+    vstoreL(v, 0, accumulated + at + q * LPV_N);
   }
 }
 
-// One work-item per (node, cascade): global (LPV_NODES, LPV_CASCADES).
+// LPV_LANES consecutive nodes per work-item, global (⌈LPV_NODES / LPV_LANES⌉ rounded up to whole
+// work-groups, LPV_CASCADES).
 kernel void lpv_resolve_geometry(global const long* geometryAcc, float invFixedScale, global float* geometry) {
-  size_t node = get_global_id(0), k = get_global_id(1);
-  long4 fromRsm = vload4((k * 2 + 0) * LPV_NODES + node, geometryAcc);
-  long4 fromCamera = vload4((k * 2 + 1) * LPV_NODES + node, geometryAcc);
-  float4 g = convert_float4(fromRsm.x >= fromCamera.x ? fromRsm : fromCamera) * invFixedScale;
-  global float* planes = geometry + k * 4 * LPV_NODES + node;
-  planes[0] = g.x;
-  planes[LPV_NODES] = g.y;
-  planes[2 * LPV_NODES] = g.z;
-  planes[3 * LPV_NODES] = g.w;
+  int node0 = get_global_id(0) * LPV_LANES, k = get_global_id(1);
+  if (node0 >= LPV_NODES) return;
+  global const long* fromRsm = geometryAcc + ((size_t)(k * 2 + 0) * LPV_NODES + node0) * 4;
+  global const long* fromCamera = geometryAcc + ((size_t)(k * 2 + 1) * LPV_NODES + node0) * 4;
+  float c[4][LPV_LANES];
+#pragma unroll
+  for (int l = 0; l < LPV_LANES; ++l) {
+    int i = min(l, LPV_NODES - 1 - node0);  // lanes past the last node repeat it, not stored
+    long4 r = vload4(i, fromRsm), m = vload4(i, fromCamera);
+    float4 g = lpv_fixed_to_float4(r.x >= m.x ? r : m) * invFixedScale;
+    c[0][l] = g.x;
+    c[1][l] = g.y;
+    c[2][l] = g.z;
+    c[3][l] = g.w;
+  }
+  global float* planes = geometry + (size_t)k * 4 * LPV_NODES + node0;
+  if (node0 + LPV_LANES <= LPV_NODES) {
+#pragma unroll
+    for (int q = 0; q < 4; ++q) vstoreL(vloadL(0, c[q]), 0, planes + q * LPV_NODES);
+  } else {
+    for (int l = 0; node0 + l < LPV_NODES; ++l)
+      for (int q = 0; q < 4; ++q) planes[q * LPV_NODES + l] = c[q][l];
+  }
 }
 
 // ---- propagation ------------------------------------------------------------------------------
@@ -301,48 +389,15 @@ kernel void lpv_resolve_geometry(global const long* geometryAcc, float invFixedS
 // volume GV at the face the two cells share (the mean of its 4 corner nodes: all light into the
 // destination enters there) blocks every face's share.
 
-#if LPV_LANES == 16
-typedef float16 floatL;
-typedef int16 intL;
-#define vloadL vload16
-#define vstoreL vstore16
-#define LPV_LANE_IDS (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
-#define vload_halfL vload_half16
-#define vstore_halfL_rte vstore_half16_rte
-#elif LPV_LANES == 8
-typedef float8 floatL;
-typedef int8 intL;
-#define vloadL vload8
-#define vstoreL vstore8
-#define LPV_LANE_IDS (int8)(0, 1, 2, 3, 4, 5, 6, 7)
-#define vload_halfL vload_half8
-#define vstore_halfL_rte vstore_half8_rte
-#elif LPV_LANES == 4
-typedef float4 floatL;
-typedef int4 intL;
-#define vloadL vload4
-#define vstoreL vstore4
-#define LPV_LANE_IDS (int4)(0, 1, 2, 3)
-#define vload_halfL vload_half4
-#define vstore_halfL_rte vstore_half4_rte
-#else
-typedef float floatL;
-typedef int intL;
-#define vload_halfL vload_half
-#define vstore_halfL_rte vstore_half_rte
-#define vloadL(o, p) ((p)[o])
-#define vstoreL(v, o, p) ((p)[o] = (v))
-#define LPV_LANE_IDS 0
-#endif
 
 // The lookup grid (lpv_lookup_grid below) for LPV_LANES cells of a row from their accumulated
-// coefficients c[0..3] (one channel) in cascade k: c times the clamped-cosine convolution and 1/s²,
-// stored as one float4 per cell at `out`. Written by the last propagation step of each cascade
+// coefficients c[0..3] (one channel, grid units) in cascade k: the SH coefficients times the
+// clamped-cosine convolution and 1/s², stored as one float4 per cell at `out`. Written by the last propagation step of each cascade
 // and, when no step has run since the grid was set, by lpv_lookup_grid.
 inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, int k, global float4* out) {
   float s = cascades[k].w, s2 = s * s;
-  floatL q0 = (GI_SH_COSCONV0 * GI_SH_Y0 / s2) * c[0], q1 = (GI_SH_COSCONV1 * GI_SH_Y1 / s2) * c[1],
-         q2 = (GI_SH_COSCONV1 * GI_SH_Y1 / s2) * c[2], q3 = (GI_SH_COSCONV1 * GI_SH_Y1 / s2) * c[3];
+  const float f0 = GI_SH_COSCONV0 * GI_SH_Y0 / LPV_UNIT0, f1 = GI_SH_COSCONV1 * GI_SH_Y1 / LPV_UNIT1;
+  floatL q0 = (f0 / s2) * c[0], q1 = (f1 / s2) * c[1], q2 = (f1 / s2) * c[2], q3 = (f1 / s2) * c[3];
 #if LPV_LANES == GI_VW && GI_VW > 1
   GI_AOS4_STORE((global float*)out, q0, q1, q2, q3);
 #else
@@ -357,7 +412,6 @@ inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, i
 
 // Index of axis a's linear SH coefficient in the (Y00, y, z, x) order.
 #define LPV_COEF(a) ((a) == 0 ? 3 : (a))
-#define LPV_SIDE_SCALE 0.4472135955f  // 1/√5: ω = normalize(2·d ± e_b)
 // Blocking potential at each cell's 3 lower faces, once per frame (the geometry volume does not
 // change over the propagation steps): the mean of the 4 corner nodes of the face between cell
 // c − e_a and c. Plane p = a·4 + coefficient of the grids' row-block layout (LPV_AT). Stored in
@@ -405,23 +459,24 @@ inline void lpv_transmittance(int dir, const floatL* g, floatL mainMax, floatL s
   t[4] = fmin(fmax(openSide - sideB2, 0.0f), sideMax);
 }
 
-// Adds the light channel `in` (4 coefficient planes) of the neighbour in direction `dir` sends
-// through the destination's 5 faces: face fluxes T_f · max(0, I(ω_f)) into o[0] (sum of the
+// Adds the light channel `in` (4 coefficients, grid units) of the neighbour in direction `dir`
+// sends through the destination's 5 faces: face fluxes T_f · max(0, I(ω_f)) into o[0] (sum of the
 // fluxes) and o[1..3] (signed along the re-emission axis), scaled by the lobe constants at the end.
-// With blocking the 30 factors live in memory (they do not fit in registers) and each is read
-// once, as the operand of one multiply; without, they are two constants in registers and the
-// fluxes go into the sums by fused multiply-adds. Either way the direction's 5 fluxes are summed
-// first and added to o[0] once, so that o[0] is not one chain of 30 dependent adds per channel.
+// In grid units I(d) = in0 + s·√5·in_a on the main face and I(normalize(2d ± e_b)) = in0 + 2s·in_a
+// ± in_b on the side faces. With blocking the 30 factors live in memory (they do not fit in
+// registers) and each is read once, as the operand of one multiply; without, they are two
+// constants in registers and the fluxes go into the sums by fused multiply-adds (with blocking
+// that form was 5-10 % slower: its factors are read twice, and it spilled more). Either way the
+// direction's 5 fluxes are summed first and added to o[0] once, so that o[0] is not one chain of
+// 30 dependent operations per channel.
 inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, const bool blocking) {
   int a = dir / 2;
   float s = dir % 2 ? -1.0f : 1.0f;
   int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
-  floatL dc = GI_SH_Y0 * in[0];
-  floatL fMain = fmax(fma(in[LPV_COEF(a)], (floatL)(GI_SH_Y1 * s), dc), 0.0f);
-  floatL side = fma(in[LPV_COEF(a)], (floatL)(GI_SH_Y1 * LPV_SIDE_SCALE * 2.0f * s), dc);
-  floatL r1 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b1)], r2 = (GI_SH_Y1 * LPV_SIDE_SCALE) * in[LPV_COEF(b2)];
-  floatL f1p = fmax(side + r1, 0.0f), f1m = fmax(side - r1, 0.0f);
-  floatL f2p = fmax(side + r2, 0.0f), f2m = fmax(side - r2, 0.0f);
+  floatL fMain = fmax(fma(in[LPV_COEF(a)], (floatL)(s / LPV_SIDE_SCALE), in[0]), 0.0f);
+  floatL side = fma(in[LPV_COEF(a)], (floatL)(2.0f * s), in[0]);
+  floatL f1p = fmax(side + in[LPV_COEF(b1)], 0.0f), f1m = fmax(side - in[LPV_COEF(b1)], 0.0f);
+  floatL f2p = fmax(side + in[LPV_COEF(b2)], 0.0f), f2m = fmax(side - in[LPV_COEF(b2)], 0.0f);
   if (blocking) {
     fMain *= t[0];
     f1p *= t[1];
@@ -504,7 +559,8 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
       for (int q = 0; q < 4; ++q) in[q] = vloadL(0, src + planes + q * LPV_N + nb);
       lpv_faces(dir, in, t[dir], o, blocking);
     }
-    const float lobe[4] = {GI_SH_LOBE0, GI_SH_LOBE1, GI_SH_LOBE1, GI_SH_LOBE1};
+    const float lobe[4] = {GI_SH_LOBE0 * LPV_UNIT0, GI_SH_LOBE1 * LPV_UNIT1, GI_SH_LOBE1 * LPV_UNIT1,
+                           GI_SH_LOBE1 * LPV_UNIT1};  // re-emitted cosine lobes, in grid units
     floatL total[4];
 #pragma unroll
     for (int q = 0; q < 4; ++q) {

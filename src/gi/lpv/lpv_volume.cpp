@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "cl/gather_width.h"
+#include "kernels/common/sh.h"
 
 namespace gi {
 
@@ -147,6 +148,11 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   propagateRange_.local[1] = propagateRange_.local[2] = 1;
 }
 
+// The grids hold each SH coefficient times its basis constant (lpv.cl LPV_UNIT0, LPV_UNIT1: Y0 and
+// Y1/√5, in the kernel's float arithmetic); the host reads and writes plain coefficients.
+static const float kGridUnit[4] = {GI_SH_Y0, GI_SH_Y1 * 0.4472135955f, GI_SH_Y1 * 0.4472135955f,
+                                   GI_SH_Y1 * 0.4472135955f};
+
 size_t LpvVolume::gridOffset(int k, int p, size_t cell) const {
   size_t n = size_t(n_), x = cell % n, y = cell / n % n, z = cell / (n * n);
   size_t slice = 12 * n * n + kSkew;
@@ -194,12 +200,15 @@ void LpvVolume::addGeometryCamera(const GBuffer& g) {
 
 void LpvVolume::resolve(bool geometry) {
   resolveInjection_.args(gridAcc_, 1.0f / injectionScale_, grids_[0], accumulated_);
-  ctx_.launch(resolveInjection_, cl::NDRange::d3(cellsPerGrid(), 3, size_t(cascades_)), "lpv: resolve");
+  ctx_.launch(resolveInjection_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * 3 * cascades_),
+              "lpv: resolve");
   current_ = 0;
   lookupGridCurrent_ = false;
   if (!geometry) return;
   resolveGeometry_.args(geometryAcc_, 1.0f / kGeometryFixedScale, geometry_);
-  ctx_.launch(resolveGeometry_, cl::NDRange::d2(nodesPerGrid(), size_t(cascades_)), "lpv: resolve");
+  size_t nodeGroups = (nodesPerGrid() + lanes_ - 1) / lanes_;  // LPV_LANES nodes per work-item
+  ctx_.launch(resolveGeometry_, cl::NDRange::d2(cl::roundUp(nodeGroups, 16), size_t(cascades_), 16, 1),
+              "lpv: resolve");
 }
 
 void LpvVolume::setInjected(const std::vector<glm::vec4>& coefficients) {
@@ -208,7 +217,8 @@ void LpvVolume::setInjected(const std::vector<glm::vec4>& coefficients) {
   std::vector<float> planes(gridFloats(), 0.0f);
   for (size_t i = 0; i < coefficients.size(); ++i) {  // i = (k·3 + ch)·cells + cell
     size_t kch = i / cells, cell = i % cells;
-    for (int c = 0; c < 4; ++c) planes[gridOffset(int(kch / 3), int(kch % 3) * 4 + c, cell)] = coefficients[i][c];
+    for (int c = 0; c < 4; ++c)
+      planes[gridOffset(int(kch / 3), int(kch % 3) * 4 + c, cell)] = coefficients[i][c] * kGridUnit[c];
   }
   ctx_.write(grids_[0], planes.data(), planes.size() * sizeof(float));
   ctx_.write(accumulated_, planes.data(), planes.size() * sizeof(float));
@@ -222,7 +232,7 @@ std::vector<glm::vec4> LpvVolume::readGrid(const cl::Buffer& b) {
   std::vector<glm::vec4> out(cells * 3 * cascades_);
   for (size_t i = 0; i < out.size(); ++i) {
     size_t kch = i / cells, cell = i % cells;
-    for (int c = 0; c < 4; ++c) out[i][c] = planes[gridOffset(int(kch / 3), int(kch % 3) * 4 + c, cell)];
+    for (int c = 0; c < 4; ++c) out[i][c] = planes[gridOffset(int(kch / 3), int(kch % 3) * 4 + c, cell)] / kGridUnit[c];
   }
   return out;
 }

@@ -3,7 +3,8 @@
 // (lpv_technique.cpp) drives it once per frame; the tests drive the passes one by one.
 //
 // Units: the grid stores the SH coefficients (kernels/common/sh.h) of each cell's intensity
-// I(ω) in W/sr by direction of travel; the geometry volume stores blocking potential
+// I(ω) in W/sr by direction of travel (on the device each times its basis constant, lpv.cl
+// LPV_UNIT0/1; the read and set functions below convert); the geometry volume stores blocking potential
 // (dimensionless, A/s² × cosine lobe). A grid with `cascades` levels is LPV_N³ cells each; level k
 // is the axis-aligned cube with corner origin[k] and cell edge cell[k] (LpvCascade).
 #pragma once
