@@ -7,8 +7,9 @@
 //                   [--only voxelize|cones]
 // --quick: only the default configuration and the targets (128³).
 // --only voxelize: only the voxelization passes at 128³ (clear, voxelize, occupied list), repeated
-//   `frames` times without rendering; prints the minimum beside the median (on a shared machine the
-//   minimum is the better estimate of the unloaded time).
+//   `frames` times without rendering, with the lanes kernel (vct_voxelize) and the trianglewise
+//   one (vct_voxelize_trianglewise) alternately; prints the minimum beside the median (on a shared
+//   machine the minimum is the better estimate of the unloaded time).
 // --only cones: only the two isotropic 128³ configurations (diffuse cones at full and at half
 //   resolution, specular cone), for A/B timing of the cone marches.
 #include <algorithm>
@@ -42,18 +43,24 @@ int main(int argc, char** argv) {
                   VoxelScene::bytesFor(res, true) / 1e6, VoxelScene::bytesFor(res, false, true) / 1e6,
                   VoxelScene::bytesFor(res, true, true) / 1e6);
     if (args.only == "voxelize") {
+      // The lanes kernel and the trianglewise reference alternately, frame by frame, so that both
+      // see the same machine load.
       DeviceScene ds(ctx, scene);
       VoxelScene vs(ctx, scene, 128);
-      for (int i = 0; i < a.warmup; ++i) vs.voxelize(ds);
+      using K = VoxelScene::VoxelizeKernel;
+      const std::pair<K, const char*> kernels[] = {{K::Lanes, "lanes"}, {K::Trianglewise, "trianglewise"}};
+      for (int i = 0; i < a.warmup; ++i)
+        for (auto& k : kernels) vs.voxelize(ds, k.first);
       ctx.profiler().discard();
       std::map<std::string, std::vector<double>> per;
-      for (int f = 0; f < a.frames; ++f) {
-        vs.voxelize(ds);
-        for (auto& [name, ms] : ctx.profiler().collect()) per[name].push_back(ms);
-      }
-      std::printf("\n128^3 voxelization only, %d repetitions\n", a.frames);
+      for (int f = 0; f < a.frames; ++f)
+        for (auto& k : kernels) {
+          vs.voxelize(ds, k.first);
+          for (auto& [name, ms] : ctx.profiler().collect()) per[std::string(k.second) + "  " + name].push_back(ms);
+        }
+      std::printf("\n128^3 voxelization only, %d repetitions of each kernel, alternating\n", a.frames);
       for (auto& [name, ms] : per)
-        std::printf("  %-34s median %8.3f ms, min %8.3f ms\n", name.c_str(), timing::median(ms),
+        std::printf("  %-48s median %8.3f ms, min %8.3f ms\n", name.c_str(), timing::median(ms),
                     *std::min_element(ms.begin(), ms.end()));
       return 0;
     }

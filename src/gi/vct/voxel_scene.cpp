@@ -54,12 +54,14 @@ uint64_t VoxelScene::anisoBytes() const {
 
 VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
     : ctx_(ctx), grid_(fitVoxelGrid(scene.bounds, resolution)) {
-  voxelizeProgram_ = ctx.buildProgram("kernels/gi/vct/voxelize.cl");
+  voxelizeProgram_ = ctx.buildProgram("kernels/gi/vct/voxelize.cl", cl::withGatherWidth(ctx));
   clear_ = voxelizeProgram_.kernel("vct_clear_occupied");
   occupancyCount_ = voxelizeProgram_.kernel("vct_occupancy_count");
-  occupancyScan_ = voxelizeProgram_.kernel("vct_occupancy_scan");
+  scan_ = voxelizeProgram_.kernel("vct_exclusive_scan");
   occupancyList_ = voxelizeProgram_.kernel("vct_occupancy_list");
+  triangleColumns_ = voxelizeProgram_.kernel("vct_triangle_columns");
   voxelize_ = voxelizeProgram_.kernel("vct_voxelize");
+  voxelizeTrianglewise_ = voxelizeProgram_.kernel("vct_voxelize_trianglewise");
   lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl", cl::withGatherWidth(ctx));
   injectLanes_ = cl::gatherVectorWidth(ctx);
   inject_ = lightProgram_.kernel("vct_inject");
@@ -88,24 +90,41 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   ctx.fill(iso_, 0.0f);
   ctx.fill(occupiedCount_, uint32_t(0));
   ctx.fill(occupancy_, uint32_t(0));
+  columnTotal_ = cl::Buffer(ctx, 4, CL_MEM_READ_WRITE, "vct voxel column count");
 }
 
 uint32_t VoxelScene::occupancySpans() const { return uint32_t(voxelCount() / kOccupancySpanVoxels); }
 
-void VoxelScene::voxelize(const DeviceScene& scene) {
+void VoxelScene::voxelize(const DeviceScene& scene, VoxelizeKernel kernel) {
   uint32_t n = uint32_t(voxelCount()), spans = occupancySpans();
   clear_.args(occupied_, occupiedCount_, acc_, iso_, occupancy_);
   ctx_.launch(clear_, cl::NDRange::d1(cl::roundUp(n, 256), 256), "vct: clear");
-  if (scene.triangleCount > 0) {
+  uint32_t triangles = scene.triangleCount;
+  if (triangles > 0 && kernel == VoxelizeKernel::Trianglewise) {
+    voxelizeTrianglewise_.args(grid_, scene.positions, scene.normals, scene.uvs, scene.triangles,
+                               scene.triangleInstance, scene.materials, scene.textures, scene.texels, instanceEmits_,
+                               triangles, acc_, occupancy_);
+    ctx_.launch(voxelizeTrianglewise_, cl::NDRange::d1(cl::roundUp(triangles, 64), 64), "vct: voxelize (trianglewise)");
+  } else if (triangles > 0) {
+    if (triangleSetup_.bytes() < uint64_t(triangles) * 16) {
+      triangleSetup_ = cl::Buffer(ctx_, uint64_t(triangles) * 16, CL_MEM_READ_WRITE, "vct triangle voxel setup");
+      columnStart_ = cl::Buffer(ctx_, uint64_t(triangles) * 4, CL_MEM_READ_WRITE, "vct triangle first voxel columns");
+    }
+    triangleColumns_.args(grid_, scene.positions, scene.uvs, scene.triangles, scene.materials, scene.textures, triangles,
+                          triangleSetup_, columnStart_);
+    ctx_.launch(triangleColumns_, cl::NDRange::d1(cl::roundUp(triangles, 64), 64), "vct: voxelize");
+    scan_.args(columnStart_, triangles, columnTotal_);
+    ctx_.launch(scan_, cl::NDRange::d1(1, 1), "vct: voxelize");
+    // The column count stays on the device: a fixed number of work-items loops over it.
     voxelize_.args(grid_, scene.positions, scene.normals, scene.uvs, scene.triangles, scene.triangleInstance,
-                   scene.materials, scene.textures, scene.texels, instanceEmits_, scene.triangleCount, acc_,
-                   occupancy_);
-    ctx_.launch(voxelize_, cl::NDRange::d1(cl::roundUp(scene.triangleCount, 64), 64), "vct: voxelize");
+                   scene.materials, scene.textures, scene.texels, instanceEmits_, triangles, triangleSetup_, columnStart_,
+                   columnTotal_, acc_, occupancy_);
+    ctx_.launch(voxelize_, cl::NDRange::d1(kVoxelizeWorkItems, 64), "vct: voxelize");
   }
   occupancyCount_.args(occupancy_, spans, spanCounts_);
   ctx_.launch(occupancyCount_, cl::NDRange::d1(cl::roundUp(spans, 16), 16), "vct: occupied list");
-  occupancyScan_.args(spanCounts_, spans, occupiedCount_);
-  ctx_.launch(occupancyScan_, cl::NDRange::d1(1, 1), "vct: occupied list");
+  scan_.args(spanCounts_, spans, occupiedCount_);
+  ctx_.launch(scan_, cl::NDRange::d1(1, 1), "vct: occupied list");
   occupancyList_.args(occupancy_, spanCounts_, spans, occupied_);
   ctx_.launch(occupancyList_, cl::NDRange::d1(cl::roundUp(spans, 16), 16), "vct: occupied list");
 }

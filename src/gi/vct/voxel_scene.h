@@ -39,7 +39,10 @@ public:
   // previous voxelization's occupied list (accumulators and level 0 of iso): level 0 outside that
   // list must be zero, as voxelize/inject leave it (a caller writing iso itself must not voxelize
   // into the same VoxelScene afterwards).
-  void voxelize(const DeviceScene& scene);
+  // Lanes: the triangles' voxel columns spread over SIMD lanes (vct_voxelize); Trianglewise: one
+  // work-item per triangle (vct_voxelize_trianglewise, the tests' reference). Same accumulators.
+  enum class VoxelizeKernel { Lanes, Trianglewise };
+  void voxelize(const DeviceScene& scene, VoxelizeKernel kernel = VoxelizeKernel::Lanes);
   // Level 0 of the occupied voxels: L = ρ/π·E_direct + L_e (premultiplied by opacity) from the
   // lights and shadow maps; the other voxels stay zero.
   void inject(const DeviceScene& scene, const ShadowMapSet& shadows);
@@ -59,7 +62,7 @@ public:
   cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (allocated on first use)
   cl::Buffer& sh() { return sh_; }            // 3 float4 per voxel of iso (allocated on first use)
   cl::Buffer& shAniso() { return shAniso_; }  // 3 float4 per voxel of aniso (allocated on first use)
-  uint64_t bytes() const { return acc_.bytes() + occupied_.bytes() + occupancy_.bytes() + spanCounts_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes(); }
+  uint64_t bytes() const { return acc_.bytes() + occupied_.bytes() + occupancy_.bytes() + spanCounts_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes() + triangleSetup_.bytes() + columnStart_.bytes(); }
   // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes)
   // (+ SH coefficients of the chains used).
   static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false);
@@ -74,11 +77,17 @@ private:
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
   int injectLanes_ = 1;  // GI_VW of lightProgram_ (occupied voxels per vct_inject work-item)
-  cl::Kernel clear_, occupancyCount_, occupancyScan_, occupancyList_, voxelize_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
+  cl::Kernel clear_, occupancyCount_, scan_, occupancyList_, triangleColumns_, voxelize_, voxelizeTrianglewise_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
   // occupied_: the voxels the last voxelization touched (count in occupiedCount_), in increasing
   // order, built from their bits in occupancy_ (1 bit per voxel) through per-span counts.
   static constexpr uint64_t kOccupancySpanVoxels = 64 * 32;  // GI_VOX_SPAN_WORDS words (voxelize.cl)
   uint32_t occupancySpans() const;
+  // Per triangle (allocated on the first voxelization): its voxel setup (uint4) and the first of
+  // its voxel columns in the list of all columns (columnTotal_: their count).
+  cl::Buffer triangleSetup_, columnStart_, columnTotal_;
+  // Work-items of vct_voxelize (each loops over every kVoxelizeWorkItems-th group of columns):
+  // enough work-groups of 64 for every core.
+  static constexpr uint32_t kVoxelizeWorkItems = 8192;
   cl::Buffer instanceEmits_, acc_, occupied_, occupiedCount_, occupancy_, spanCounts_, iso_, aniso_, sh_, shAniso_;
 
   // The 6 directional volumes of levels ≥ 1, float4 each, and the chain's zero end record.
