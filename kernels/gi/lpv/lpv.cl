@@ -41,7 +41,8 @@
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
 //   geometry float planes [cascade][coefficient][node]; geometryAcc long [cascade][source rsm, camera][node][4]
 //   faceGeometry half row blocks [cascade][z][y][axis][coefficient][x] (laid out like grid)
-//   lookupGrid float4 [cascade][channel][cell] (lpv_lookup_grid)
+//   lookupGrid float4 [cascade][cell][channel] (LPV_LOOKUP_AT; [cascade][channel][cell] when it is
+//            copied into a 3D image)
 //   cascades float4 [cascade]: (origin xyz of cell (0,0,0)'s corner, cell edge s), metres
 // The propagation works on LPV_LANES cells of a row per work-item, the injection and surfel
 // kernels on GI_VW texels at a time (the native float width on CPU devices: 16 with AVX-512, 8
@@ -390,15 +391,31 @@ kernel void lpv_resolve_geometry(global const long* geometryAcc, float invFixedS
 // destination enters there) blocks every face's share.
 
 
-// The lookup grid (lpv_lookup_grid below) for LPV_LANES cells of a row from their accumulated
-// coefficients c[0..3] (one channel, grid units) in cascade k: the SH coefficients times the
-// clamped-cosine convolution and 1/s², stored as one float4 per cell at `out`. Written by the last propagation step of each cascade
-// and, when no step has run since the grid was set, by lpv_lookup_grid.
-inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, int k, global float4* out) {
+// Index of the lookup grid's float4 for channel ch of cell `cell` (cell_index order) of cascade
+// k. For the lookup's own interpolation the 3 channels of a cell lie side by side, so that the 8
+// corners of a trilinear lookup are 4 runs of 2 × 48 contiguous bytes (with one slab per channel
+// they were 12 runs in 3 slabs 0.5 MB apart, and their loads were the lookup's hot spot); the 3D
+// image stacks the (cascade, channel) slabs along z, so for it the buffer keeps that order.
+#if LPV_IMAGES
+#define LPV_LOOKUP_AT(k, ch, cell) ((size_t)((k) * 3 + (ch)) * LPV_CELLS + (cell))
+#define LPV_LOOKUP_CELL_STRIDE 1
+#else
+#define LPV_LOOKUP_AT(k, ch, cell) (((size_t)(k) * LPV_CELLS + (cell)) * 3 + (ch))
+#define LPV_LOOKUP_CELL_STRIDE 3
+#endif
+
+// The lookup grid (lpv_lookup_grid below) for LPV_LANES cells of a row, from cell `cell0` on, from
+// their accumulated coefficients c[0..3] (channel ch, grid units) in cascade k: the SH coefficients
+// times the clamped-cosine convolution and 1/s², one float4 per cell and channel. Written by the
+// last propagation step of each cascade and, when no step has run since the grid was set, by
+// lpv_lookup_grid.
+inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, int k, int ch, int cell0,
+                                   global float4* lookupGrid) {
+  global float4* out = lookupGrid + LPV_LOOKUP_AT(k, ch, cell0);
   float s = cascades[k].w, s2 = s * s;
   const float f0 = GI_SH_COSCONV0 * GI_SH_Y0 / LPV_UNIT0, f1 = GI_SH_COSCONV1 * GI_SH_Y1 / LPV_UNIT1;
   floatL q0 = (f0 / s2) * c[0], q1 = (f1 / s2) * c[1], q2 = (f1 / s2) * c[2], q3 = (f1 / s2) * c[3];
-#if LPV_LANES == GI_VW && GI_VW > 1
+#if LPV_LANES == GI_VW && GI_VW > 1 && LPV_LOOKUP_CELL_STRIDE == 1
   GI_AOS4_STORE((global float*)out, q0, q1, q2, q3);
 #else
   float v[4][LPV_LANES];
@@ -406,7 +423,7 @@ inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, i
   vstoreL(q1, 0, v[1]);
   vstoreL(q2, 0, v[2]);
   vstoreL(q3, 0, v[3]);
-  for (int l = 0; l < LPV_LANES; ++l) out[l] = (float4)(v[0][l], v[1][l], v[2][l], v[3][l]);
+  for (int l = 0; l < LPV_LANES; ++l) out[l * LPV_LOOKUP_CELL_STRIDE] = (float4)(v[0][l], v[1][l], v[2][l], v[3][l]);
 #endif
 }
 
@@ -574,7 +591,7 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
       }
     }
     if (accumulate & LPV_WRITE_LOOKUP)
-      lpv_store_lookup_cells(total, cascades, k, lookupGrid + (size_t)(k * 3 + ch) * LPV_CELLS + (z * LPV_N + y) * LPV_N + x0);
+      lpv_store_lookup_cells(total, cascades, k, ch, (z * LPV_N + y) * LPV_N + x0, lookupGrid);
   }
 }
 
@@ -591,21 +608,20 @@ kernel void lpv_propagate_open(global const float* src, global float* dst, globa
 
 // ---- lookup ----------------------------------------------------------------------------------
 
-// The lookup grid: per cascade k and channel ch a slab of LPV_N³ float4 (slab k·3 + ch, cells in
-// cell_index order) holding the accumulated coefficients times the clamped-cosine convolution and
+// The lookup grid: per cascade k, cell and channel ch one float4 (LPV_LOOKUP_AT) holding the
+// accumulated coefficients times the clamped-cosine convolution and
 // 1/s² (radiance = intensity / s²): irradiance coefficients q with E(n) = q.x − q.y·n.y − q.z·n.z −
 // q.w·n.x for a surface with normal n (light arriving travels along −n). The lookup interpolates
 // them trilinearly; E is linear in q, so this equals the convolution of the interpolated grid.
 // LPV_LANES cells of a row per work-item, global (N / LPV_LANES, N, N · 3 · LPV_CASCADES) with
-// z + N·(k·3 + ch) along the third axis: the 4 coefficient rows are contiguous loads and the float4
-// cells one transposed store (one work-item per cell and channel compiled to scalar code).
+// z + N·(k·3 + ch) along the third axis: the 4 coefficient rows are contiguous loads (one
+// work-item per cell and channel compiled to scalar code).
 kernel void lpv_lookup_grid(global const float* accumulated, constant float4* cascades, global float4* lookupGrid) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2) % LPV_N;
   int slab = get_global_id(2) / LPV_N, k = slab / 3, ch = slab % 3;  // slab = k·3 + ch
   global const float* c = accumulated + LPV_PAD + LPV_AT(k, ch * 4, x0, y, z);
   floatL coefficients[4] = {vloadL(0, c), vloadL(0, c + LPV_N), vloadL(0, c + 2 * LPV_N), vloadL(0, c + 3 * LPV_N)};
-  lpv_store_lookup_cells(coefficients, cascades, k,
-                         lookupGrid + (size_t)slab * LPV_CELLS + (z * LPV_N + y) * LPV_N + x0);
+  lpv_store_lookup_cells(coefficients, cascades, k, ch, (z * LPV_N + y) * LPV_N + x0, lookupGrid);
 }
 
 // The lookup grid is a 3D image (LPV_N × LPV_N × LPV_N·3·cascades, the slabs stacked along z) on
@@ -639,7 +655,9 @@ inline int lpv_min_lane(intV v) {
 // grid's border cells) in the lookup grid, E = Σ_corners weight · (q0 − q·n).
 __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, intV k, float3V p, float3V ng,
                                float3V n, floatV* e) {
-  floatV ox = 0.0f, oy = 0.0f, oz = 0.0f, s = 1.0f;
+  // Cell coordinates (p − origin)/s + ½·ng − ½ with 1/s per cascade (a scalar division each, not
+  // 3 vector divisions per lane).
+  floatV ox = 0.0f, oy = 0.0f, oz = 0.0f, invS = 1.0f;
 #pragma unroll
   for (int j = 0; j < LPV_CASCADES; ++j) {
     float4 c = cascades[j];
@@ -647,11 +665,11 @@ __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID gr
     ox = GI_SEL(ox, (floatV)(c.x), here);
     oy = GI_SEL(oy, (floatV)(c.y), here);
     oz = GI_SEL(oz, (floatV)(c.z), here);
-    s = GI_SEL(s, (floatV)(c.w), here);
+    invS = GI_SEL(invS, (floatV)(1.0f / c.w), here);
   }
-  floatV ux = clamp((p.x + 0.5f * s * ng.x - ox) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
-  floatV uy = clamp((p.y + 0.5f * s * ng.y - oy) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
-  floatV uz = clamp((p.z + 0.5f * s * ng.z - oz) / s - 0.5f, 0.0f, (float)(LPV_N - 1));
+  floatV ux = clamp(fma(p.x - ox, invS, fma(0.5f, ng.x, -0.5f)), 0.0f, (float)(LPV_N - 1));
+  floatV uy = clamp(fma(p.y - oy, invS, fma(0.5f, ng.y, -0.5f)), 0.0f, (float)(LPV_N - 1));
+  floatV uz = clamp(fma(p.z - oz, invS, fma(0.5f, ng.z, -0.5f)), 0.0f, (float)(LPV_N - 1));
 #if LPV_IMAGES
   // The sampler filters lane by lane: texel centres at integer + ½, slab (k·3 + ch) at depth (k·3 + ch)·N.
   float u[3][GI_VW], q[3][4][GI_VW];
@@ -682,7 +700,7 @@ __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID gr
                             gx * gy * fz, fx * gy * fz, gx * fy * fz, fx * fy * fz};  // corner bits x, y, z
   const int corner[8] = {0, 1, LPV_N, LPV_N + 1, LPV_N * LPV_N, LPV_N * LPV_N + 1, LPV_N * LPV_N + LPV_N,
                          LPV_N * LPV_N + LPV_N + 1};
-  intV cell = k * (3 * LPV_CELLS) + (cz * LPV_N + cy) * LPV_N + cx;  // the lower corner cell, channel 0
+  intV cell = k * LPV_CELLS + (cz * LPV_N + cy) * LPV_N + cx;  // the lower corner cell (LPV_LOOKUP_AT)
   e[0] = e[1] = e[2] = 0.0f;
   // Each distinct lower corner cell among the lanes once, in ascending order: its 8 corners are
   // loaded once (uniform loads) and used by the lanes that interpolate from it — usually all of
@@ -695,11 +713,11 @@ __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID gr
     todo = todo && !mine;
 #pragma unroll
     for (int ch = 0; ch < 3; ++ch) {
-      global const float4* g = grid + base + ch * LPV_CELLS;
+      global const float4* g = grid + LPV_LOOKUP_AT(0, ch, base);
       floatV sum = 0.0f;
 #pragma unroll
       for (int i = 0; i < 8; ++i) {
-        float4 q = g[corner[i]];
+        float4 q = g[corner[i] * LPV_LOOKUP_CELL_STRIDE];
         sum += weight[i] * (q.x - q.y * n.y - q.z * n.z - q.w * n.x);  // light arriving travels along −n
       }
       e[ch] = GI_SEL(e[ch], sum, mine);
@@ -711,11 +729,11 @@ __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID gr
 // Blend factor of seed 003 eq. 3.2: 0 well inside cascade k, rising to 1 over the outer tenth of
 // its extent (largest component over the axes).
 inline floatV cascade_blend(float4 cascade, float3V p) {
-  float extent = cascade.w * LPV_N, w = 0.1f * extent;
+  float extent = cascade.w * LPV_N, w = 0.1f * extent, invW = 1.0f / w;  // one scalar division
   float3 centre = cascade.xyz + 0.5f * extent;
-  floatV ax = clamp((fabs(p.x - centre.x) - (0.5f * extent - w)) / w, 0.0f, 1.0f);
-  floatV ay = clamp((fabs(p.y - centre.y) - (0.5f * extent - w)) / w, 0.0f, 1.0f);
-  floatV az = clamp((fabs(p.z - centre.z) - (0.5f * extent - w)) / w, 0.0f, 1.0f);
+  floatV ax = clamp((fabs(p.x - centre.x) - (0.5f * extent - w)) * invW, 0.0f, 1.0f);
+  floatV ay = clamp((fabs(p.y - centre.y) - (0.5f * extent - w)) * invW, 0.0f, 1.0f);
+  floatV az = clamp((fabs(p.z - centre.z) - (0.5f * extent - w)) * invW, 0.0f, 1.0f);
   return fmax(ax, fmax(ay, az));
 }
 
