@@ -96,8 +96,11 @@ int main(int argc, char** argv) {
       bench(ctx, scene, a, "splat", {"splat.count=256"}, "splat, N=256, default epsilon 1/256");
       bench(ctx, scene, a, "splat", {"splat.count=256", "splat.epsilon=1e-4"}, "splat, N=256, epsilon 1e-4");
     }
-    if (want("sh-igi"))
+    if (want("sh-igi")) {
       bench(ctx, scene, a, "sh-igi", {"sh-igi.count=256"}, "sh-igi 4x4, N=256, 27-channel filter 4x4, glossy");
+      bench(ctx, scene, a, "sh-igi", {"sh-igi.count=256", "sh-igi.filter=separable"},
+            "sh-igi 4x4, N=256, 27-channel separable filter 4+4, glossy");
+    }
     if (!want("vpl")) return 0;
     // d_min bias: mean indirect with the default clamp vs a clamp 100x smaller (≈ no clamp).
     double withClamp = meanIndirect(ctx, scene, a, {"vpl.count=256"});

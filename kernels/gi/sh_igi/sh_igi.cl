@@ -7,8 +7,17 @@
 // the shading normal and the Phong-lobe ones at the reflected view vector. Normal maps keep their
 // detail and glossy surfaces get directional indirect light.
 //
-//   sh_igi_project   de-interleaved sub-images (InterleavedGather planes: position, GEOMETRIC
-//                    normal), GI_VW slots per work-item, VPLs of the slot's set broadcast:
+// Everything runs in camera order: no sub-image copies. A work-item takes GI_VW consecutive
+// pixels of one camera row; pixel (x, y) belongs to VPL set (x mod n) + n·(y mod m), so the lanes
+// of a work-item belong to different sets and each lane reads its own VPL from a per-frame lane
+// table (sh_igi_vpl_lanes) — one vector load per VPL attribute, as the broadcast of a sub-image's
+// shared VPL was one scalar load.
+//
+//   sh_igi_vpl_lanes  the VPL lane table: for each lane phase (x0 mod n, y mod m) and iteration k,
+//                    the 10 attributes (position, d_min², normal, flux) of VPL set_l + n·m·k of
+//                    every lane l as GI_VW-wide vectors; lanes whose set has no k-th VPL get a VPL
+//                    of zero flux and normal (weight 0, adds exactly nothing).
+//   sh_igi_project   per pixel x, over its VPL set p:
 //                      L_lm += Y_lm(ω) · Φ_p · max(0, n_p·(−ω)) / (π · d · max(d², d_min²)) · d · n·m
 //                    ω the unit direction receiver -> VPL (incoming direction), i.e. the radiance
 //                    a surface facing the VPL receives, as a delta in direction (a Monte-Carlo
@@ -16,19 +25,16 @@
 //                    cannot light it and are skipped (a visibility-free bound, exact for a plane).
 //                    With `direct` every punctual light is added to every pixel as one more
 //                    source, weight 1 (it is not split among the sets): E⊥ · shadow-map
-//                    visibility · Y_lm(ω_light). Output: the 27 coefficient planes [channel][k] of
-//                    the filter's row blocks (SH_PLANES below).
-//   sh_igi_keys      view depth, geometric normal and instance id, camera order -> the same
-//                    packed planes (the filter's discontinuity keys).
-//   sh_igi_filter_shade   in the packed layout, GI_VW slots of one sub-image row per work-item:
-//                    box filter of the 27 coefficients over GI_FX × GI_FY camera pixels accepting
-//                    neighbours by the §3 test (same as kernels/gi/filters/discontinuity.cl),
-//                    renormalised; then per pixel
+//                    visibility · Y_lm(ω_light). Output: the 27 coefficient planes [channel][k] and
+//                    the filter's keys (view depth, geometric normal, instance id) in the row
+//                    blocks of SH_PLANES below.
+//   sh_igi_filter_shade   GI_VW pixels of one row per work-item: box filter of the 27
+//                    coefficients over GI_FX × GI_FY pixels accepting neighbours by the §3 test
+//                    (same as kernels/gi/filters/discontinuity.cl), renormalised; then per pixel
 //                      L = ρ/π · max(0, Σ Â_l L_lm Y_lm(n_s)) + F0 · max(0, Σ g_l L_lm Y_lm(r))
 //                    Â = (π, 2π/3, π/4), g = (1, (s+1)/(s+2), s/(s+3)), s = 2/α² − 2 ∈ [0, 10⁴],
 //                    α = roughness², r the view vector reflected about n_s. F0 is the Phong
-//                    lobe's specular albedo (no Fresnel angle dependence). Written to camera
-//                    order: only the shaded RGB is re-interleaved, never the 27 coefficients.
+//                    lobe's specular albedo (no Fresnel angle dependence).
 #include "common/math.h"
 #include "common/shared_types.h"
 #include "common/lights.h"
@@ -53,35 +59,27 @@ inline void sh9_basisV(floatV x, floatV y, floatV z, floatV* b) {
   b[8] = GI_SH_Y22 * (x * x - y * y);
 }
 
-// The filter's planes (host: ShIgiPlanes in src/gi/sh_igi/sh_igi_technique.h), in row blocks: the
-// slots of row sy of sub-image c (InterleavedGather's packed layout) form block c·subHeight + sy of
-// SH_PLANES rows of `pitch` floats, plane k of the row in row k of the block, after a margin of
-// `pad` floats (also after the last block) that holds every slot a window offset can reach from
-// a slot of the image. Planes 0..26: the coefficients [channel][k]; 27: view depth; 28..30:
-// geometric normal; 31: instance id (uint bits). Why blocks rather than 32 whole-image planes: a
-// work-item's 16 window offsets × 27 planes then lie in 16 blocks of a few pages, not 432 pages
-// (one TLB miss per load made the whole-plane filter 2× slower than the camera-order one).
+// The filter's planes (host: ShIgiPlanes in src/gi/sh_igi/sh_igi_technique.h), in row blocks: camera
+// row y is block y of SH_PLANES rows of `pitch` floats, plane k of the row in row k of the block,
+// pixel x at column x; `pad` floats before the first block. Planes 0..26: the coefficients
+// [channel][k]; 27: view depth; 28..30: geometric normal; 31: instance id (uint bits). The pitch
+// leaves a margin of at least 16 floats after the row's last whole vector, so a window offset's
+// vector load never leaves the buffer (columns outside the image are rejected by the x test).
+// Why blocks rather than 32 whole-image planes: a work-item's window then lies in GI_FY blocks of
+// a few pages, not 32·GI_FY pages far apart.
 #define SH_DEPTH SH_C
 #define SH_NORMAL (SH_C + 1)
 #define SH_ID (SH_C + 4)
 #define SH_PLANES 32
-
-// Work-item of the packed-layout passes: GI_VW consecutive slots sx0 … sx0 + GI_VW − 1 of row sy of
-// sub-image c, camera pixel of lane l at (n·(sx0 + l) + cx, y). Ids run over c fastest, then the
-// column block, then sy: the n·m work-items of one block read the same neighbour rows of every
-// sub-image (each coefficient lies in n·m windows), so those lines are reused while in cache —
-// with the column block fastest the filter ran 5–10× slower, streaming from L3.
-typedef struct {
-  int sx0, sy, c, cx, cy, y;
-} ShRow;
+#define SH_VPL_ATTRS 10  // lane table: position x, y, z, d_min², normal x, y, z, flux r, g, b
 
 // A whole vector of plane slots, stored past the caches on an x86 CPU device (non-temporal): every
 // line of the planes is written whole, once per frame, and not read again before the filter, so
 // an ordinary store only adds a read for ownership of each line (≈ 25 MB of extra DRAM reads per
-// frame at 640×360). On Sponza 640×360 this cut the projection's CPU time by ≈ 20 % and the keys'
-// by ≈ 20 % (perf samples, docs/PERFORMANCE.md). The address is a multiple of 64 bytes (pitch,
-// pad and a work-item's first slot are multiples of 16 floats; PoCL aligns buffers to 128 bytes),
-// as the aligned streaming store requires. Other devices store normally.
+// frame at 640×360; it cut the projection's CPU time by ≈ 20 %, docs/PERFORMANCE.md). The address
+// is a multiple of 64 bytes (pitch, pad and a work-item's first pixel are multiples of 16 floats;
+// PoCL aligns buffers to 128 bytes), as the aligned streaming store requires. Other devices store
+// normally.
 #if defined(GI_DEVICE_CPU) && GI_VW > 1 && (defined(__x86_64__) || defined(__i386__))
 #define SH_STREAM_STORES 1
 #else
@@ -105,82 +103,93 @@ inline void sh_stream_fence(void) {
 #endif
 }
 
-inline global float* sh_block(global float* planes, int pad, int pitch, int subHeight, int c, int sy) {
-  return planes + pad + ((size_t)c * subHeight + sy) * SH_PLANES * pitch;
+// Work-item id -> its first pixel x0 and row y (row-major: the work-items of a row are adjacent).
+inline bool sh_pixels(int width, int height, int* x0, int* y) {
+  int columns = (width + GI_VW - 1) / GI_VW, id = get_global_id(0);
+  *y = id / columns;
+  *x0 = (id - *y * columns) * GI_VW;
+  return *y < height;
 }
 
-inline bool sh_row(int id, int columns, int width, int height, int n, int m, ShRow* r) {
-  int sets = n * m;
-  int block = id / sets;
-  r->c = id - block * sets;
-  r->sy = block / columns;
-  r->sx0 = (block - r->sy * columns) * GI_VW;
-  r->cy = r->c / n;
-  r->cx = r->c - r->cy * n;
-  r->y = r->sy * m + r->cy;
-  return r->y < height && r->sx0 * n + r->cx < width;
+// Lane phase of the work-item starting at (x0, y): lane l holds pixel x0 + l of VPL set
+// ((phase mod n) + l) mod n + n·(phase / n).
+inline int sh_phase(int x0, int y, int n, int m) { return x0 % n + n * (y % m); }
+
+kernel void sh_igi_vpl_lanes(int n, int m, int count, int iterations, global const float4* vpls,
+                             global float* table) {
+  int sets = n * m, id = get_global_id(0);
+  if (id >= sets * iterations) return;
+  int phase = id / iterations, k = id - phase * iterations;
+  int px = phase % n, cy = phase / n;
+  global float* o = table + (size_t)id * SH_VPL_ATTRS * GI_VW;
+  for (int l = 0; l < GI_VW; ++l) {
+    int v = (px + l) % n + n * cy + sets * k;
+    float4 a = (float4)(0.0f, 0.0f, 0.0f, 1.0f), b = (float4)(0.0f), f = (float4)(0.0f);
+    if (v < count) {
+      a = vpls[3 * v];
+      b = vpls[3 * v + 1];
+      f = vpls[3 * v + 2];
+    }
+    float attr[SH_VPL_ATTRS] = {a.x, a.y, a.z, a.w, b.x, b.y, b.z, f.x, f.y, f.z};
+    for (int j = 0; j < SH_VPL_ATTRS; ++j) o[j * GI_VW + l] = attr[j];
+  }
 }
 
-// Band of coefficient k.
-#define SH_BAND(k) ((k) == 0 ? 0 : (k) < 4 ? 1 : 2)
-
-kernel void sh_igi_project(int width, int height, int n, int m, int subWidth, int subHeight, int stride, int pitch,
-                           int pad, global const float* receivers, global const float4* vpls, int count, int direct,
-                           global const GiLight* lights, int lightCount, global const GiView* shadowViews,
-                           global const uint* shadowOffsets, global const float* shadowDepths,
-                           global float* planes GI_VPL_VISIBILITY_PARAMS) {
+kernel void sh_igi_project(int width, int height, int n, int m, int pitch, int pad, global const float* position,
+                           global const float* geoNormal, global const float* depth, global const uint* instance,
+                           global const float* vplLanes, int iterations, int direct, global const GiLight* lights,
+                           int lightCount, global const GiView* shadowViews, global const uint* shadowOffsets,
+                           global const float* shadowDepths, global float* planes GI_VPL_VISIBILITY_PARAMS) {
   GI_VPL_VISIBILITY_BEGIN
-  ShRow r;
-  int columns = (subWidth + GI_VW - 1) / GI_VW;
-  if (!sh_row(get_global_id(0), columns, width, height, n, m, &r)) {
+  int x0, y;
+  if (!sh_pixels(width, height, &x0, &y)) {
     sh_stream_fence();
     return;
   }
-  int sets = n * m, set = r.c;
-  size_t L = (size_t)sets * stride;  // receivers: InterleavedGather's six planes of L slots
-  // InterleavedGather's sub-image rows are stride / subHeight slots apart (subWidth rounded up to 16).
-  size_t slot = (size_t)r.c * stride + (size_t)r.sy * (stride / subHeight) + r.sx0;
-  int lanes = min(GI_VW, subWidth - r.sx0);
-  floatV px, py, pz, nx, ny, nz;
-  if (lanes == GI_VW) {
-    px = vloadV(0, receivers + slot);
-    py = vloadV(0, receivers + L + slot);
-    pz = vloadV(0, receivers + 2 * L + slot);
-    nx = vloadV(0, receivers + 3 * L + slot);
-    ny = vloadV(0, receivers + 4 * L + slot);
-    nz = vloadV(0, receivers + 5 * L + slot);
-  } else {  // the row's last slots: lanes past it repeat its last slot (never stored)
-    intV s = (int)slot + min(GI_LANES, lanes - 1);
-    px = GI_GATHER(floatV, receivers, s);
-    py = GI_GATHER(floatV, receivers + L, s);
-    pz = GI_GATHER(floatV, receivers + 2 * L, s);
-    nx = GI_GATHER(floatV, receivers + 3 * L, s);
-    ny = GI_GATHER(floatV, receivers + 4 * L, s);
-    nz = GI_GATHER(floatV, receivers + 5 * L, s);
+  intV x = x0 + GI_LANES;
+  intV inside = x < width;
+  size_t row = (size_t)y * width;
+  floatV px, py, pz, pw, nx, ny, nz, nw, z;
+  uintV id;
+  if (x0 + GI_VW <= width) {
+    GI_AOS4_LOAD(position + 4 * (row + x0), px, py, pz, pw)
+    GI_AOS4_LOAD(geoNormal + 4 * (row + x0), nx, ny, nz, nw)
+    z = vloadV(0, depth + row + x0);
+    id = vloadV(0, instance + row + x0);
+  } else {  // the row's last pixels: lanes past it repeat its last pixel, with the invalid id
+    intV i = (int)row + min(x, width - 1);
+    GI_GATHER_AOS4(float, position, i, px, py, pz, pw)
+    GI_GATHER_AOS4(float, geoNormal, i, nx, ny, nz, nw)
+    z = GI_GATHER(floatV, depth, i);
+    id = GI_SEL((uintV)(GI_INVALID_ID), GI_GATHER(uintV, instance, i), inside);
   }
+  floatV zero = (floatV)(0.0f);
+  intV surface = inside & (pw > 0.0f);  // background: zero normal, no VPL faces it
+  floatV gx = GI_SEL(zero, nx, surface), gy = GI_SEL(zero, ny, surface), gz = GI_SEL(zero, nz, surface);
   floatV c[SH_C];
 #pragma unroll
-  for (int k = 0; k < SH_C; ++k) c[k] = (floatV)(0.0f);
-  for (int k = set; k < count; k += sets) {
-    float4 a = vpls[3 * k], b = vpls[3 * k + 1], f = vpls[3 * k + 2];
-    floatV vx = a.x - px, vy = a.y - py, vz = a.z - pz;  // receiver -> VPL
+  for (int k = 0; k < SH_C; ++k) c[k] = zero;
+  global const float* t = vplLanes + (size_t)sh_phase(x0, y, n, m) * iterations * SH_VPL_ATTRS * GI_VW;
+  for (int k = 0; k < iterations; ++k, t += SH_VPL_ATTRS * GI_VW) {
+    floatV vx = vloadV(0, t) - px, vy = vloadV(1, t) - py, vz = vloadV(2, t) - pz;  // receiver -> VPL
     floatV d2 = vx * vx + vy * vy + vz * vz;
     floatV invD = rsqrt(fmax(d2, 1e-20f));
-    floatV cp = -(b.x * vx + b.y * vy + b.z * vz);  // n_p·(x − x_p) = d · n_p·(−ω)
-    floatV front = nx * vx + ny * vy + nz * vz;     // > 0: the VPL is above the geometric tangent plane
-    floatV w = GI_SEL((floatV)(0.0f), fmax(cp, 0.0f) * invD / fmax(d2, a.w), front > 0.0f);
-    w = GI_VPL_VISIBLE(px, py, pz, a.xyz, w);
-    floatV y[SH_N];
-    sh9_basisV(vx * invD, vy * invD, vz * invD, y);
+    floatV cp = -(vloadV(4, t) * vx + vloadV(5, t) * vy + vloadV(6, t) * vz);  // n_p·(x − x_p) = d · n_p·(−ω)
+    floatV front = gx * vx + gy * vy + gz * vz;  // > 0: the VPL is above the geometric tangent plane
+    floatV w = GI_SEL(zero, fmax(cp, 0.0f) * invD / fmax(d2, vloadV(3, t)), front > 0.0f);
+    w = GI_VPL_VISIBLE_LANES(px, py, pz, vloadV(0, t), vloadV(1, t), vloadV(2, t), w);
+    floatV b[SH_N];
+    sh9_basisV(vx * invD, vy * invD, vz * invD, b);
+    floatV fr = vloadV(7, t), fg = vloadV(8, t), fb = vloadV(9, t);
 #pragma unroll
     for (int i = 0; i < SH_N; ++i) {
-      floatV wy = w * y[i];
-      c[i] += f.x * wy;
-      c[SH_N + i] += f.y * wy;
-      c[2 * SH_N + i] += f.z * wy;
+      floatV wy = w * b[i];
+      c[i] += fr * wy;
+      c[SH_N + i] += fg * wy;
+      c[2 * SH_N + i] += fb * wy;
     }
   }
-  float s = (float)sets * GI_INV_PI;
+  float s = (float)(n * m) * GI_INV_PI;
 #pragma unroll
   for (int k = 0; k < SH_C; ++k) c[k] *= s;
   if (direct) {
@@ -188,85 +197,42 @@ kernel void sh_igi_project(int width, int height, int n, int m, int subWidth, in
     for (int li = 0; li < lightCount; ++li) {
       global const GiLight* l = &lights[li];
       float er[GI_VW], eg[GI_VW], eb[GI_VW], wx[GI_VW], wy[GI_VW], wz[GI_VW];
-      float ax[GI_VW], ay[GI_VW], az[GI_VW], gx[GI_VW], gy[GI_VW], gz[GI_VW];
+      float ax[GI_VW], ay[GI_VW], az[GI_VW], bx[GI_VW], by[GI_VW], bz[GI_VW];
       vstoreV(px, 0, ax); vstoreV(py, 0, ay); vstoreV(pz, 0, az);
-      vstoreV(nx, 0, gx); vstoreV(ny, 0, gy); vstoreV(nz, 0, gz);
+      vstoreV(gx, 0, bx); vstoreV(gy, 0, by); vstoreV(gz, 0, bz);
       for (int lane = 0; lane < GI_VW; ++lane) {
-        float3 x = (float3)(ax[lane], ay[lane], az[lane]), ng = (float3)(gx[lane], gy[lane], gz[lane]);
+        float3 p = (float3)(ax[lane], ay[lane], az[lane]), ng = (float3)(bx[lane], by[lane], bz[lane]);
         float3 wi;
         float dist;
-        float3 e = light_incident(l, x, &wi, &dist);
+        float3 e = light_incident(l, p, &wi, &dist);
         if (!(dot(ng, wi) > 0.0f) || !(e.x + e.y + e.z > 0.0f)) e = (float3)(0.0f);
-        else e *= shadow_visibility(l, shadowViews, shadowOffsets, shadowDepths, x, ng);
+        else e *= shadow_visibility(l, shadowViews, shadowOffsets, shadowDepths, p, ng);
         er[lane] = e.x; eg[lane] = e.y; eb[lane] = e.z;
         wx[lane] = wi.x; wy[lane] = wi.y; wz[lane] = wi.z;
       }
-      floatV y[SH_N];
-      sh9_basisV(vloadV(0, wx), vloadV(0, wy), vloadV(0, wz), y);
+      floatV b[SH_N];
+      sh9_basisV(vloadV(0, wx), vloadV(0, wy), vloadV(0, wz), b);
       floatV vr = vloadV(0, er), vg = vloadV(0, eg), vb = vloadV(0, eb);
 #pragma unroll
       for (int i = 0; i < SH_N; ++i) {
-        c[i] += vr * y[i];
-        c[SH_N + i] += vg * y[i];
-        c[2 * SH_N + i] += vb * y[i];
+        c[i] += vr * b[i];
+        c[SH_N + i] += vg * b[i];
+        c[2 * SH_N + i] += vb * b[i];
       }
     }
   }
-  global float* o = sh_block(planes, pad, pitch, subHeight, r.c, r.sy) + r.sx0;
+  // Whole vectors also past the row's end: those lanes land in the pitch's margin, with the
+  // invalid id (the filter rejects them) and finite values.
+  global float* o = planes + pad + (size_t)y * SH_PLANES * pitch + x0;
 #pragma unroll
-  for (int k = 0; k < SH_C; ++k) {
-    if (lanes == GI_VW) {
-      sh_store_stream(c[k], o + (size_t)k * pitch);
-    } else {
-      float t[GI_VW];
-      vstoreV(c[k], 0, t);
-      for (int l = 0; l < lanes; ++l) o[(size_t)k * pitch + l] = t[l];
-    }
-  }
+  for (int k = 0; k < SH_C; ++k) sh_store_stream(c[k], o + (size_t)k * pitch);
+  sh_store_stream(GI_SEL(zero, z, inside), o + (size_t)SH_DEPTH * pitch);
+  sh_store_stream(GI_SEL(zero, nx, inside), o + (size_t)SH_NORMAL * pitch);
+  sh_store_stream(GI_SEL(zero, ny, inside), o + (size_t)(SH_NORMAL + 1) * pitch);
+  sh_store_stream(GI_SEL(zero, nz, inside), o + (size_t)(SH_NORMAL + 2) * pitch);
+  sh_store_stream(as_floatV(id), o + (size_t)SH_ID * pitch);
   sh_stream_fence();
 }
-
-// Pass 2: the filter's keys (view depth, geometric normal, instance id) from camera order into the
-// packed planes; lanes without a camera pixel get the invalid id. A row's last vector may hold
-// fewer than GI_VW slots of the row: stored lane by lane, never into the next row's slots.
-kernel void sh_igi_keys(int width, int height, int n, int m, int subWidth, int subHeight, int pitch, int pad,
-                        global const float* depth, global const float4* geoNormal, global const uint* instance,
-                        global float* planes) {
-  ShRow r;
-  int columns = (subWidth + GI_VW - 1) / GI_VW;
-  if (!sh_row(get_global_id(0), columns, width, height, n, m, &r)) {
-    sh_stream_fence();
-    return;
-  }
-  intV x = (r.sx0 + GI_LANES) * n + r.cx;
-  intV inside = x < width;
-  intV i = r.y * width + min(x, width - 1);
-  floatV z = GI_GATHER(floatV, depth, i), gnx, gny, gnz, gnw;
-  uintV id = GI_SEL((uintV)(GI_INVALID_ID), GI_GATHER(uintV, instance, i), inside);
-  GI_GATHER_AOS4(float, (global const float*)geoNormal, i, gnx, gny, gnz, gnw);
-  floatV zero = (floatV)(0.0f);
-  floatV key[5] = {GI_SEL(zero, z, inside), GI_SEL(zero, gnx, inside), GI_SEL(zero, gny, inside),
-                   GI_SEL(zero, gnz, inside), as_floatV(id)};
-  global float* o = sh_block(planes, pad, pitch, subHeight, r.c, r.sy) + r.sx0;
-  int lanes = min(GI_VW, subWidth - r.sx0);
-#pragma unroll
-  for (int k = 0; k < 5; ++k) {
-    global float* plane = o + (size_t)(SH_DEPTH + k) * pitch;
-    if (lanes == GI_VW) {
-      sh_store_stream(key[k], plane);
-    } else {
-      float t[GI_VW];
-      vstoreV(key[k], 0, t);
-      for (int l = 0; l < lanes; ++l) plane[l] = t[l];
-    }
-  }
-  sh_stream_fence();
-}
-
-// ⌊t / d⌋ for |t| ≤ 64, 1 ≤ d ≤ 8 without an integer division (one scalar idiv per window offset
-// was a visible share of the filter): (t + ½)/d is at least 1/16 away from an integer and the float
-// error is far below that, so the floor is exact.
-inline int floor_div_small(int t, int d) { return (int)floor(((float)t + 0.5f) * (1.0f / (float)d)); }
 
 #ifndef GI_FX
 #define GI_FX 4
@@ -274,84 +240,82 @@ inline int floor_div_small(int t, int d) { return (int)floor(((float)t + 0.5f) *
 #ifndef GI_FY
 #define GI_FY 4
 #endif
+// Output rows per work-item of the separable filter: its row pass covers SH_FILTER_ROWS + GI_FY − 1
+// rows, kept in private memory for the column pass.
+#define SH_FILTER_ROWS 8  // host: kShIgiFilterRows
 
-// Pass 3, in the packed layout (no re-interleave of the 27 coefficients): the window offset
-// (dx, dy) of the pixel in sub-image c = (cx, cy), slot (sx, sy), is the pixel of sub-image
-// ((cx + dx) mod n, (cy + dy) mod m) at slot (sx + ⌊(cx + dx)/n⌋, sy + ⌊(cy + dy)/m⌋): the shift
-// depends on (c, dx, dy) only, never on the lane, so every window offset is one contiguous vector
-// load per plane. Weights (§3 test, dy outer, dx inner: the host mirror's order) first, then the
-// coefficients channel by channel — 9 accumulators live instead of 27 — folded into the zonal
-// shading sums of the centre pixel. Shading inputs are gathered from camera order and the
-// result is written there.
-kernel void sh_igi_filter_shade(int width, int height, int n, int m, int subWidth, int subHeight, int pitch, int pad,
-                                global const float* planes, global const float4* gPosition,
-                                global const float4* gNormal, global const float4* gAlbedo,
-                                global const float4* gSpecular, GiView camera, float tauZ, float cosTauN,
-                                int sameInstance, int glossy, global float4* out) {
-  ShRow r;
-  int columns = (subWidth + GI_VW - 1) / GI_VW;
-  if (!sh_row(get_global_id(0), columns, width, height, n, m, &r)) return;
-  intV x = (r.sx0 + GI_LANES) * n + r.cx;
-  size_t blockSize = (size_t)SH_PLANES * pitch;
-  global const float* base = planes + pad + ((size_t)r.c * subHeight + r.sy) * blockSize + r.sx0;
-  global const float* pz = base + (size_t)SH_DEPTH * pitch;
-  global const float* pnx = base + (size_t)SH_NORMAL * pitch;
-  global const float* pny = pnx + pitch;
-  global const float* pnz = pny + pitch;
-  global const uint* pid = (global const uint*)(base + (size_t)SH_ID * pitch);
-  floatV z = vloadV(0, pz), nx = vloadV(0, pnx), ny = vloadV(0, pny), nz = vloadV(0, pnz);
-  uintV id = vloadV(0, pid);
-  floatV tz = tauZ * z;
+// The filter's keys of GI_VW consecutive pixels: `q` is plane 0 of their row block at their first pixel.
+typedef struct {
+  floatV z, tz, nx, ny, nz;
+  uintV id;
+} ShKeys;
 
-  floatV w[GI_FX * GI_FY];
-  long off[GI_FX * GI_FY];  // window offset q relative to this work-item's first slot, in floats
-  floatV ws = (floatV)(0.0f);
-#pragma unroll
-  for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
-    int ty = r.cy + dy, shy = floor_div_small(ty, m);
-    int qy = r.y + dy;
-#pragma unroll
-    for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
-      int q = (dy + GI_FY / 2) * GI_FX + dx + GI_FX / 2;
-      int tx = r.cx + dx, shx = floor_div_small(tx, n);
-      int cq = (ty - shy * m) * n + (tx - shx * n);
-      off[q] = ((long)(cq - r.c) * subHeight + shy) * (long)blockSize + shx;
-      w[q] = (floatV)(0.0f);
-      if (qy < 0 || qy >= height) continue;
-      long s = off[q];
-      intV qx = x + dx;
-      uintV qid = vloadV(0, pid + s);
-      floatV dz = fabs(vloadV(0, pz + s) - z);
-      floatV dn = vloadV(0, pnx + s) * nx + vloadV(0, pny + s) * ny + vloadV(0, pnz + s) * nz;
+inline ShKeys sh_keys(global const float* q, int pitch, float tauZ) {
+  ShKeys k;
+  k.z = vloadV(0, q + (size_t)SH_DEPTH * pitch);
+  k.nx = vloadV(0, q + (size_t)SH_NORMAL * pitch);
+  k.ny = vloadV(0, q + (size_t)(SH_NORMAL + 1) * pitch);
+  k.nz = vloadV(0, q + (size_t)(SH_NORMAL + 2) * pitch);
+  k.id = vloadV(0, (global const uint*)(q + (size_t)SH_ID * pitch));
+  k.tz = tauZ * k.z;
+  return k;
+}
+
+// Weight 1 or 0 of neighbours q (plane 0 of their row block at their first pixel; columns qx) for
+// pixels with keys c: the §3 test — inside the image, a surface, |Δz| ≤ τ_z·z, geometric normals
+// within τ_n, and, when asked, the same instance id.
+inline floatV sh_weight(global const float* q, int pitch, ShKeys c, intV qx, int width, float cosTauN,
+                        int sameInstance) {
+  uintV qid = vloadV(0, (global const uint*)(q + (size_t)SH_ID * pitch));
+  floatV dz = fabs(vloadV(0, q + (size_t)SH_DEPTH * pitch) - c.z);
+  floatV dn = vloadV(0, q + (size_t)SH_NORMAL * pitch) * c.nx + vloadV(0, q + (size_t)(SH_NORMAL + 1) * pitch) * c.ny +
+              vloadV(0, q + (size_t)(SH_NORMAL + 2) * pitch) * c.nz;
 #if GI_VW == 1
-      w[q] = (qx >= 0 && qx < width && qid != GI_INVALID_ID && dz <= tz && dn >= cosTauN &&
-              (sameInstance == 0 || qid == id)) ? 1.0f : 0.0f;
+  return (qx >= 0 && qx < width && qid != GI_INVALID_ID && dz <= c.tz && dn >= cosTauN &&
+          (sameInstance == 0 || qid == c.id)) ? 1.0f : 0.0f;
 #else
-      intV ok = (qx >= 0) & (qx < width) & (qid != GI_INVALID_ID) & (dz <= tz) & (dn >= cosTauN) &
-                ((intV)(sameInstance == 0 ? -1 : 0) | (qid == id));
-      w[q] = select((floatV)(0.0f), (floatV)(1.0f), ok);
+  intV ok = (qx >= 0) & (qx < width) & (qid != GI_INVALID_ID) & (dz <= c.tz) & (dn >= cosTauN) &
+            ((intV)(sameInstance == 0 ? -1 : 0) | (qid == c.id));
+  return select((floatV)(0.0f), (floatV)(1.0f), ok);
 #endif
-      ws += w[q];
-    }
-  }
-  // The centre pixel always passes its own test unless it is background; ws = 0 only there.
-  floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
+}
 
-  // Shading inputs gathered from camera order (lanes past the image repeat the row's last pixel).
-  intV inside = x < width;
-  intV i = r.y * width + min(x, width - 1);
-  float3V p, nrm, alb, f0;
-  floatV pw, unused, roughness;
-  GI_GATHER_AOS4(float, (global const float*)gPosition, i, p.x, p.y, p.z, pw);
-  GI_GATHER_AOS4(float, (global const float*)gNormal, i, nrm.x, nrm.y, nrm.z, unused);
-  GI_GATHER_AOS4(float, (global const float*)gAlbedo, i, alb.x, alb.y, alb.z, unused);
-  GI_GATHER_AOS4(float, (global const float*)gSpecular, i, f0.x, f0.y, f0.z, roughness);
-  // Zonal weights of each coefficient: Lambert at the shading normal, Phong lobe at r.
+// What the shading of GI_VW pixels of row y from x0 needs besides the filtered coefficients: the
+// zonal weights of each coefficient (Lambert at the shading normal, Phong lobe at r), albedo, F0
+// and which lanes are surface pixels (lanes past the image repeat the row's last pixel).
+typedef struct {
   floatV tn[SH_N], tr[SH_N];
-  sh9_basisV(nrm.x, nrm.y, nrm.z, tn);
+  float3V alb, f0;
+  intV surface;
+} ShShading;
+
+#define SH_BAND(k) ((k) == 0 ? 0 : (k) < 4 ? 1 : 2)
+
+inline void sh_shading(int width, int x0, int y, uintV id, global const float* gPosition, global const float* gNormal,
+                       global const float* gAlbedo, global const float* gSpecular, GiView camera, int glossy,
+                       ShShading* s) {
+  intV x = x0 + GI_LANES;
+  intV inside = x < width;
+  size_t row = (size_t)y * width;
+  float3V p, nrm;
+  floatV pw, unused, roughness;
+  if (x0 + GI_VW <= width) {
+    GI_AOS4_LOAD(gPosition + 4 * (row + x0), p.x, p.y, p.z, pw)
+    GI_AOS4_LOAD(gNormal + 4 * (row + x0), nrm.x, nrm.y, nrm.z, unused)
+    GI_AOS4_LOAD(gAlbedo + 4 * (row + x0), s->alb.x, s->alb.y, s->alb.z, unused)
+    GI_AOS4_LOAD(gSpecular + 4 * (row + x0), s->f0.x, s->f0.y, s->f0.z, roughness)
+  } else {
+    intV i = (int)row + min(x, width - 1);
+    GI_GATHER_AOS4(float, gPosition, i, p.x, p.y, p.z, pw)
+    GI_GATHER_AOS4(float, gNormal, i, nrm.x, nrm.y, nrm.z, unused)
+    GI_GATHER_AOS4(float, gAlbedo, i, s->alb.x, s->alb.y, s->alb.z, unused)
+    GI_GATHER_AOS4(float, gSpecular, i, s->f0.x, s->f0.y, s->f0.z, roughness)
+  }
+  s->surface = (id != GI_INVALID_ID) & (pw != 0.0f) & inside;
+  sh9_basisV(nrm.x, nrm.y, nrm.z, s->tn);
   const float lambert[3] = {GI_SH_COSCONV0, GI_SH_COSCONV1, GI_SH_COSCONV2};
 #pragma unroll
-  for (int k = 0; k < SH_N; ++k) tn[k] = lambert[SH_BAND(k)] * tn[k];
+  for (int k = 0; k < SH_N; ++k) s->tn[k] = lambert[SH_BAND(k)] * s->tn[k];
   if (glossy) {
     float3V wo;
     if (camera.orthographic) {
@@ -363,18 +327,85 @@ kernel void sh_igi_filter_shade(int width, int height, int n, int m, int subWidt
     floatV nv = dotV(nrm, wo);
     float3V rv = f3v(2.0f * nv * nrm.x - wo.x, 2.0f * nv * nrm.y - wo.y, 2.0f * nv * nrm.z - wo.z);
     floatV alpha = fmax(roughness * roughness, 1e-4f);
-    floatV s = clamp(2.0f / (alpha * alpha) - 2.0f, 0.0f, 1e4f);
-    floatV g1 = (s + 1.0f) / (s + 2.0f), g2 = s / (s + 3.0f);
-    sh9_basisV(rv.x, rv.y, rv.z, tr);
+    floatV sp = clamp(2.0f / (alpha * alpha) - 2.0f, 0.0f, 1e4f);
+    floatV g1 = (sp + 1.0f) / (sp + 2.0f), g2 = sp / (sp + 3.0f);
+    sh9_basisV(rv.x, rv.y, rv.z, s->tr);
 #pragma unroll
-    for (int k = 1; k < SH_N; ++k) tr[k] *= SH_BAND(k) == 1 ? g1 : g2;
+    for (int k = 1; k < SH_N; ++k) s->tr[k] *= SH_BAND(k) == 1 ? g1 : g2;
   } else {
 #pragma unroll
-    for (int k = 0; k < SH_N; ++k) tr[k] = (floatV)(0.0f);
+    for (int k = 0; k < SH_N; ++k) s->tr[k] = (floatV)(0.0f);
   }
+}
 
-  // Filter the 9 coefficient planes of each channel over the window (window offset outer: one
-  // weight and 9 accumulators live), then fold them into the shading sums.
+// The zonal sums of one channel's 9 filtered (not yet renormalised) coefficients.
+inline void sh_fold(const ShShading* s, const floatV* acc, floatV* diffuse, floatV* specular) {
+  floatV e = (floatV)(0.0f), sp = (floatV)(0.0f);
+#pragma unroll
+  for (int k = 0; k < SH_N; ++k) {
+    e += s->tn[k] * acc[k];
+    sp += s->tr[k] * acc[k];
+  }
+  *diffuse = e;
+  *specular = sp;
+}
+
+// L = ρ/π · max(0, inv · diffuse) + F0 · max(0, inv · specular) per channel, written to camera order.
+inline void sh_write(const ShShading* s, const floatV* diffuse, const floatV* specular, floatV inv, int glossy,
+                     int width, int x0, int y, global float* out) {
+  floatV zero = (floatV)(0.0f);
+  floatV res[3];
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch) {
+    floatV a = ch == 0 ? s->alb.x : ch == 1 ? s->alb.y : s->alb.z, f = ch == 0 ? s->f0.x : ch == 1 ? s->f0.y : s->f0.z;
+    floatV L = a * GI_INV_PI * fmax(diffuse[ch] * inv, 0.0f);
+    if (glossy) L += f * fmax(specular[ch] * inv, 0.0f);
+    res[ch] = GI_SEL(zero, L, s->surface);
+  }
+  size_t row = (size_t)y * width;
+  if (x0 + GI_VW <= width) {
+    GI_AOS4_STORE(out + 4 * (row + x0), res[0], res[1], res[2], zero)
+  } else {
+    float t[4 * GI_VW];
+    GI_AOS4_STORE(t, res[0], res[1], res[2], zero)
+    for (int l = 0; x0 + l < width; ++l) vstore4(vload4(l, t), row + x0 + l, out);
+  }
+}
+
+// Box filter + shade (`sh-igi.filter=box`). Window offset (dx, dy) of the work-item's pixels is one
+// (unaligned) vector load per plane at a fixed offset from the work-item's first pixel. Weights
+// (§3 test, dy outer, dx inner: the host mirror's order) first, then the coefficients channel by
+// channel — 9 accumulators live instead of 27 — folded into the zonal shading sums.
+kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, global const float* planes,
+                                global const float* gPosition, global const float* gNormal,
+                                global const float* gAlbedo, global const float* gSpecular, GiView camera,
+                                float tauZ, float cosTauN, int sameInstance, int glossy, global float* out) {
+  int x0, y;
+  if (!sh_pixels(width, height, &x0, &y)) return;
+  intV x = x0 + GI_LANES;
+  size_t blockSize = (size_t)SH_PLANES * pitch;
+  global const float* base = planes + pad + (size_t)y * blockSize + x0;
+  ShKeys c = sh_keys(base, pitch, tauZ);
+  floatV w[GI_FX * GI_FY];
+  long off[GI_FX * GI_FY];  // window offset q relative to this work-item's first pixel, in floats
+  floatV ws = (floatV)(0.0f);
+#pragma unroll
+  for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
+    // Rows outside the image: weight 0, and the loads go to the own row (finite values; the
+    // buffer holds no rows above the first or below the last).
+    bool rowInside = y + dy >= 0 && y + dy < height;
+#pragma unroll
+    for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
+      int q = (dy + GI_FY / 2) * GI_FX + dx + GI_FX / 2;
+      off[q] = (rowInside ? (long)dy * (long)blockSize : 0) + dx;
+      w[q] = rowInside ? sh_weight(base + off[q], pitch, c, x + dx, width, cosTauN, sameInstance) : (floatV)(0.0f);
+      ws += w[q];
+    }
+  }
+  // The centre pixel always passes its own test unless it is background; ws = 0 only there.
+  floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
+  ShShading s;
+  sh_shading(width, x0, y, c.id, gPosition, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
   floatV diffuse[3], specular[3];
   for (int ch = 0; ch < 3; ++ch) {
     global const float* channel = base + (size_t)ch * SH_N * pitch;
@@ -388,28 +419,87 @@ kernel void sh_igi_filter_shade(int width, int height, int n, int m, int subWidt
 #pragma unroll
       for (int k = 0; k < SH_N; ++k) acc[k] += wq * vloadV(0, src + (size_t)k * pitch);
     }
-    floatV e = (floatV)(0.0f), sp = (floatV)(0.0f);
+    sh_fold(&s, acc, &diffuse[ch], &specular[ch]);
+  }
+  sh_write(&s, diffuse, specular, inv, glossy, width, x0, y, out);
+}
+
+// Separable filter + shade (`sh-igi.filter=separable`, the thesis's separable blur as for igi):
+// a GI_FX × 1 pass, then a 1 × GI_FY pass over its result, each renormalised by its own accepted
+// weights and testing against its own centre pixel. Without discontinuities it is the box (the
+// same mean, up to rounding); at discontinuities a pixel can receive light through an
+// intermediate that passed both tests (a path the 2D window would reject). GI_FX + GI_FY taps
+// instead of GI_FX · GI_FY. A work-item takes GI_VW pixels of SH_FILTER_ROWS rows: the row pass
+// covers the SH_FILTER_ROWS + GI_FY − 1 rows its column passes read and keeps them in private
+// memory.
+kernel void sh_igi_filter_shade_separable(int width, int height, int pitch, int pad, global const float* planes,
+                                          global const float* gPosition, global const float* gNormal,
+                                          global const float* gAlbedo, global const float* gSpecular,
+                                          GiView camera, float tauZ, float cosTauN, int sameInstance, int glossy,
+                                          global float* out) {
+  int columns = (width + GI_VW - 1) / GI_VW, id = get_global_id(0);
+  int y0 = id / columns * SH_FILTER_ROWS, x0 = (id - id / columns * columns) * GI_VW;
+  if (y0 >= height) return;
+  intV x = x0 + GI_LANES;
+  size_t blockSize = (size_t)SH_PLANES * pitch;
+  float rowPass[SH_FILTER_ROWS + GI_FY - 1][SH_C][GI_VW];
+  for (int r = 0; r < SH_FILTER_ROWS + GI_FY - 1; ++r) {
+    int qy = y0 - GI_FY / 2 + r;
+    if (qy < 0 || qy >= height) {  // zeros: the column pass gives these rows weight 0
 #pragma unroll
-    for (int k = 0; k < SH_N; ++k) {
-      e += tn[k] * acc[k];
-      sp += tr[k] * acc[k];
+      for (int k = 0; k < SH_C; ++k) vstoreV((floatV)(0.0f), 0, rowPass[r][k]);
+      continue;
     }
-    diffuse[ch] = e;
-    specular[ch] = sp;
-  }
-  floatV zero = (floatV)(0.0f);
-  intV surface = (id != GI_INVALID_ID) & (pw != 0.0f) & inside;
-  floatV res[3];
+    global const float* base = planes + pad + (size_t)qy * blockSize + x0;
+    ShKeys c = sh_keys(base, pitch, tauZ);
+    floatV w[GI_FX];
+    floatV ws = (floatV)(0.0f);
 #pragma unroll
-  for (int ch = 0; ch < 3; ++ch) {
-    floatV a = ch == 0 ? alb.x : ch == 1 ? alb.y : alb.z, f = ch == 0 ? f0.x : ch == 1 ? f0.y : f0.z;
-    floatV L = a * GI_INV_PI * fmax(diffuse[ch] * inv, 0.0f);
-    if (glossy) L += f * fmax(specular[ch] * inv, 0.0f);
-    res[ch] = GI_SEL(zero, L, surface);
+    for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
+      w[dx + GI_FX / 2] = sh_weight(base + dx, pitch, c, x + dx, width, cosTauN, sameInstance);
+      ws += w[dx + GI_FX / 2];
+    }
+    floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);  // 0 only where no surface
+#pragma unroll
+    for (int k = 0; k < SH_C; ++k) {
+      global const float* plane = base + (size_t)k * pitch;
+      floatV sum = (floatV)(0.0f);
+#pragma unroll
+      for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) sum += w[dx + GI_FX / 2] * vloadV(0, plane + dx);
+      vstoreV(sum * inv, 0, rowPass[r][k]);
+    }
   }
-  float t[4 * GI_VW];
-  GI_AOS4_STORE(t, res[0], res[1], res[2], zero)
-  int lanes = min(GI_VW, (width - 1 - r.cx) / n - r.sx0 + 1);  // lanes with a camera pixel
-  int row = r.y * width + r.sx0 * n + r.cx;
-  for (int l = 0; l < lanes; ++l) out[row + l * n] = vload4(l, t);
+  for (int r = 0; r < SH_FILTER_ROWS; ++r) {
+    int y = y0 + r;
+    if (y >= height) break;
+    global const float* base = planes + pad + (size_t)y * blockSize + x0;
+    ShKeys c = sh_keys(base, pitch, tauZ);
+    floatV w[GI_FY];
+    floatV ws = (floatV)(0.0f);
+#pragma unroll
+    for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
+      bool rowInside = y + dy >= 0 && y + dy < height;
+      w[dy + GI_FY / 2] = rowInside ? sh_weight(base + (long)dy * (long)blockSize, pitch, c, x, width, cosTauN,
+                                                sameInstance)
+                                    : (floatV)(0.0f);
+      ws += w[dy + GI_FY / 2];
+    }
+    floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
+    ShShading s;
+    sh_shading(width, x0, y, c.id, gPosition, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
+    floatV diffuse[3], specular[3];
+    for (int ch = 0; ch < 3; ++ch) {
+      floatV acc[SH_N];
+#pragma unroll
+      for (int k = 0; k < SH_N; ++k) acc[k] = (floatV)(0.0f);
+#pragma unroll
+      for (int dy = 0; dy < GI_FY; ++dy) {
+        floatV wq = w[dy];
+#pragma unroll
+        for (int k = 0; k < SH_N; ++k) acc[k] += wq * vloadV(0, rowPass[r + dy][ch * SH_N + k]);
+      }
+      sh_fold(&s, acc, &diffuse[ch], &specular[ch]);
+    }
+    sh_write(&s, diffuse, specular, inv, glossy, width, x0, y, out);
+  }
 }

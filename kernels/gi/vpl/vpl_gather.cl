@@ -3,7 +3,7 @@
 // compiled with GI_VPL_VISIBILITY each pair is tested by a shadow ray (vpl_visibility.h).
 //
 //   gi_deinterleave   camera pixel (x, y) -> packed slot of sub-image c = (x mod n) + n·(y mod m)
-//                     at (x / n, y / m): position and normal (shading, or geometric for sh-igi) as six float planes (SoA).
+//                     at (x / n, y / m): position and shading normal as six float planes (SoA).
 //                     Sub-images are ⌈W/n⌉×⌈H/m⌉ pixels stored with a row pitch of subPitch slots
 //                     (⌈W/n⌉ rounded up to 16); slots without a pixel get a zero normal (E = 0).
 //                     Pattern 1×1 is the plain row-major copy used by the `vpl` technique.

@@ -1,7 +1,7 @@
-// `sh-igi` on the instant-radiosity machinery: VPLs from VplGenerator, the de-interleaved
-// sub-images of InterleavedGather (with geometric normals), optional visibility rays
-// (VplVisibility); its own passes project the incoming radiance into SH and filter + shade the 27
-// coefficients in the packed layout (kernels/gi/sh_igi/sh_igi.cl).
+// `sh-igi` on the instant-radiosity machinery: VPLs from VplGenerator, optional visibility rays
+// (VplVisibility); its own passes project the incoming radiance into SH straight from the camera
+// G-buffer (each lane's VPL set from a per-frame lane table) and filter + shade the 27 coefficients
+// in camera order (kernels/gi/sh_igi/sh_igi.cl).
 #include "gi/sh_igi/sh_igi_technique.h"
 
 #include <algorithm>
@@ -16,6 +16,8 @@ namespace gi {
 
 namespace {
 
+constexpr int kShIgiVplAttributes = 10;  // SH_VPL_ATTRS of the kernels' VPL lane table
+
 class ShIgiTechnique : public Technique {
 public:
   std::string name() const override { return "sh-igi"; }
@@ -23,7 +25,6 @@ public:
   bool deliversDirectLight(const ParamSet& p) const override { return p.getChoice("sh-igi.direct") == "vpl"; }
   void setup(const FrameResources& f) override {
     generator_ = std::make_unique<VplGenerator>(f.ctx, "sh-igi: vpl");
-    gather_ = std::make_unique<InterleavedGather>(f.ctx, "sh-igi");
   }
   void render(const FrameResources& f, cl::Buffer& indirect) override {
     const ParamSet& p = f.params;
@@ -36,36 +37,47 @@ public:
       throw Error("sh-igi.filter_x/filter_y (" + std::to_string(fx) + "x" + std::to_string(fy) +
                   ") must be at least the pattern " + std::to_string(n) + "x" + std::to_string(m));
     generator_->generate(f.rsms, p.getInt("sh-igi.count"), p.getFloat("sh-igi.d_min"), vpls_, visibility_.bounces(f));
-    gather_->resize(g.width, g.height, n, m);
     visibility_.update(f);
     Programs& prog = programs(f, fx, fy);
 
-    ShIgiPlanes layout(g.width, g.height, n, m, gather_->stride(), fx, fy);
+    ShIgiPlanes layout(g.width, g.height);
     if (!planes_ || planes_.bytes() != layout.bytes()) {
       planes_ = cl::Buffer(f.ctx, layout.bytes(), CL_MEM_READ_WRITE, "sh-igi filter planes");
       f.ctx.fill(planes_, 0.0f);  // margins: only ever read by neighbours the x/y tests reject
     }
 
-    gather_->deinterleave(g, /*geometricNormal=*/true);
+    // The VPL lane table: iteration k of lane phase ph holds VPL set_l + n·m·k of every lane l.
+    const int sets = n * m, iterations = (vpls_.count + sets - 1) / sets;
+    const size_t tableBytes = std::max<size_t>(1, size_t(sets) * iterations * kShIgiVplAttributes) *
+                              size_t(shIgiVectorWidth(f.ctx)) * sizeof(float);
+    if (!vplLanes_ || vplLanes_.bytes() < tableBytes)
+      vplLanes_ = cl::Buffer(f.ctx, tableBytes, CL_MEM_READ_WRITE, "sh-igi vpl lanes");
+    if (iterations > 0) {
+      prog.vplLanes.args(n, m, vpls_.count, iterations, vpls_.vpls, vplLanes_);
+      f.ctx.launch(prog.vplLanes, cl::NDRange::d1(cl::roundUp(size_t(sets) * iterations, 16), 16),
+                   "sh-igi: vpl lanes");
+    }
+
     int direct = deliversDirectLight(p) ? 1 : 0;
     cl::Kernel& project = visibility_.enabled() ? prog.projectVisible : prog.project;
-    project.args(g.width, g.height, n, m, layout.subWidth, layout.subHeight, gather_->stride(), layout.pitch,
-                 layout.pad, gather_->planes(), vpls_.vpls, vpls_.count, direct, f.deviceScene.lights,
-                 int(f.scene.lights.size()), f.shadowMaps.viewTable, f.shadowMaps.offsetTable, f.shadowMaps.depths,
-                 planes_);
+    project.args(g.width, g.height, n, m, layout.pitch, layout.pad, g.position, g.geoNormal, g.visibility.depth,
+                 g.instance, vplLanes_, iterations, direct, f.deviceScene.lights, int(f.scene.lights.size()),
+                 f.shadowMaps.viewTable, f.shadowMaps.offsetTable, f.shadowMaps.depths, planes_);
     visibility_.setArgs(project, 19);
     f.ctx.launch(project, shIgiRange(f.ctx, layout),
                  visibility_.enabled() ? "sh-igi: project + rays" : "sh-igi: project");
 
     float cosTauN = std::cos(p.getFloat("sh-igi.tau_n") * 3.14159265f / 180.0f);
-    shIgiFilterShade(f.ctx, prog.keys, prog.filter, layout, g, planes_, p.getFloat("sh-igi.tau_z"), cosTauN,
-                     p.getBool("sh-igi.same_instance"), p.getBool("sh-igi.glossy"), indirect);
+    const bool separable = p.getChoice("sh-igi.filter") == "separable";
+    shIgiFilterShade(f.ctx, separable ? prog.filterSeparable : prog.filter, separable, layout, g, planes_,
+                     p.getFloat("sh-igi.tau_z"), cosTauN, p.getBool("sh-igi.same_instance"), p.getBool("sh-igi.glossy"),
+                     indirect);
   }
 
 private:
   struct Programs {
     cl::Program program, visibleProgram;
-    cl::Kernel project, projectVisible, keys, filter;
+    cl::Kernel vplLanes, project, projectVisible, filter, filterSeparable;
   };
   // One program per filter window (compile-time GI_FX, GI_FY); the visibility variant of the
   // projection is built the first time rays are asked for.
@@ -77,8 +89,9 @@ private:
       p.program = f.ctx.buildProgram("kernels/gi/sh_igi/sh_igi.cl",
                                      {{"GI_FX", std::to_string(fx)}, {"GI_FY", std::to_string(fy)}, {"GI_VW", std::to_string(shIgiVectorWidth(f.ctx))}});
       p.project = p.program.kernel("sh_igi_project");
-      p.keys = p.program.kernel("sh_igi_keys");
+      p.vplLanes = p.program.kernel("sh_igi_vpl_lanes");
       p.filter = p.program.kernel("sh_igi_filter_shade");
+      p.filterSeparable = p.program.kernel("sh_igi_filter_shade_separable");
       it = programs_.emplace(key, std::move(p)).first;
     }
     Programs& p = it->second;
@@ -94,11 +107,10 @@ private:
   }
 
   std::unique_ptr<VplGenerator> generator_;
-  std::unique_ptr<InterleavedGather> gather_;
   std::map<std::pair<int, int>, Programs> programs_;
   VplVisibility visibility_;
   VplSet vpls_;
-  cl::Buffer planes_;
+  cl::Buffer planes_, vplLanes_;
 };
 
 }  // namespace
@@ -108,34 +120,30 @@ private:
 int shIgiVectorWidth(const cl::Context& ctx) { return ctx.vectorWidth(); }
 
 cl::NDRange shIgiRange(const cl::Context& ctx, const ShIgiPlanes& l) {
-  // Groups of whole column blocks (all n·m sub-images): the work-items of one block read the same
-  // neighbour rows.
-  const int vw = shIgiVectorWidth(ctx), sets = l.n * l.m;
-  const size_t columns = size_t(l.subWidth + vw - 1) / vw;
-  const size_t local = size_t(sets) * std::max(1, 16 / sets);
-  return cl::NDRange::d1(cl::roundUp(size_t(l.subHeight) * columns * sets, local), local);
+  const size_t columns = size_t(l.width + shIgiVectorWidth(ctx) - 1) / size_t(shIgiVectorWidth(ctx));
+  return cl::NDRange::d1(cl::roundUp(columns * size_t(l.height), 16), 16);
 }
 
-ShIgiPlanes::ShIgiPlanes(int width, int height, int n, int m, int stride, int fx, int fy)
-    : width(width), height(height), n(n), m(m), subWidth((width + n - 1) / n), subHeight((height + m - 1) / m),
-      stride(stride) {
-  pitch = int(cl::roundUp(size_t(subWidth), 16));  // whole cache lines per plane row
-  // A window offset moves a slot by at most ⌊fy/m⌋ + 1 sub-image rows (blocks) and ⌊fx/n⌋ + 1
-  // columns, and a row's last vector reads up to 16 (the widest GI_VW) slots past it.
-  pad = int(cl::roundUp(size_t(fy / m + 1) * kPlanes * pitch + fx / n + 2 + 16, 16));
-  floats = size_t(n) * m * subHeight * kPlanes * pitch + 2 * size_t(pad);
+ShIgiPlanes::ShIgiPlanes(int width, int height) : width(width), height(height) {
+  // Whole cache lines per plane row, and a margin of 16 floats after the last whole vector of 16:
+  // window offsets reach at most 8 columns left (into the previous plane row's margin) or right.
+  pitch = int(cl::roundUp(size_t(width), 16)) + 16;
+  pad = 16;
+  floats = size_t(pad) + size_t(height) * kPlanes * pitch + 16;
 }
 
-void shIgiFilterShade(cl::Context& ctx, cl::Kernel& keys, cl::Kernel& filter, const ShIgiPlanes& l, const GBuffer& g,
+void shIgiFilterShade(cl::Context& ctx, cl::Kernel& filter, bool separable, const ShIgiPlanes& l, const GBuffer& g,
                       const cl::Buffer& planes, float tauZ, float cosTauN, bool sameInstance, bool glossy,
                       cl::Buffer& out, const std::string& label) {
-  const cl::NDRange range = shIgiRange(ctx, l);
-  keys.args(l.width, l.height, l.n, l.m, l.subWidth, l.subHeight, l.pitch, l.pad, g.visibility.depth, g.geoNormal,
-            g.instance, planes);
-  ctx.launch(keys, range, label + ": filter keys");
-  filter.args(l.width, l.height, l.n, l.m, l.subWidth, l.subHeight, l.pitch, l.pad, planes, g.position, g.normal,
-              g.albedo, g.specular, g.view, tauZ, cosTauN, int(sameInstance), int(glossy), out);
-  ctx.launch(filter, range, label + ": filter + shade");
+  filter.args(l.width, l.height, l.pitch, l.pad, planes, g.position, g.normal, g.albedo, g.specular, g.view, tauZ,
+              cosTauN, int(sameInstance), int(glossy), out);
+  if (separable) {
+    const size_t columns = size_t(l.width + shIgiVectorWidth(ctx) - 1) / size_t(shIgiVectorWidth(ctx));
+    const size_t blocks = size_t(l.height + kShIgiFilterRows - 1) / kShIgiFilterRows;
+    ctx.launch(filter, cl::NDRange::d1(cl::roundUp(columns * blocks, 4), 4), label + ": filter + shade (separable)");
+  } else {
+    ctx.launch(filter, shIgiRange(ctx, l), label + ": filter + shade");
+  }
 }
 
 TechniqueInfo shIgiTechniqueInfo() {
@@ -149,6 +157,9 @@ TechniqueInfo shIgiTechniqueInfo() {
             p.addInt("sh-igi.m", 4, 1, 8, "interleave pattern height");
             p.addInt("sh-igi.filter_x", 0, 0, 16, "SH filter window width; 0 = n (must be >= n)");
             p.addInt("sh-igi.filter_y", 0, 0, 16, "SH filter window height; 0 = m (must be >= m)");
+            p.addChoice("sh-igi.filter", "box", {"box", "separable"},
+                        "filter of the 27 coefficients: box = the fx x fy window; separable = an fx x 1 pass, then "
+                        "1 x fy (the same mean without discontinuities, fx + fy taps)");
             p.addFloat("sh-igi.tau_z", 0.05, 0.0, 10.0, "filter: relative view-depth tolerance");
             p.addFloat("sh-igi.tau_n", 25.0, 0.0, 180.0, "filter: geometric-normal tolerance in degrees");
             p.addBool("sh-igi.same_instance", true, "filter: neighbours must share the instance id");

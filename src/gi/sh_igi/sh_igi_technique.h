@@ -8,34 +8,34 @@
 namespace gi {
 TechniqueInfo shIgiTechniqueInfo();
 
-// The filter's planes (kernels/gi/sh_igi/sh_igi.cl, SH_PLANES) in row blocks: the slots of row sy
-// of sub-image c (InterleavedGather's packed layout: c·stride + sy·subWidth + sx) form block
-// c·subHeight + sy of kPlanes rows of `pitch` floats; a margin of `pad` floats before the first and
-// after the last block holds every slot a window offset can reach from a slot of the image.
+// The filter's planes (kernels/gi/sh_igi/sh_igi.cl, SH_PLANES) in camera order, in row blocks:
+// camera row y is block y of kPlanes rows of `pitch` floats (plane k in row k, pixel x at column
+// x), after `pad` floats. The pitch leaves at least 16 floats after the row's last whole vector of
+// 16, so every window offset's vector load stays inside the buffer.
 struct ShIgiPlanes {
   static constexpr int kPlanes = 32;  // 27 coefficients [channel][k], view depth, geometric normal, instance id
-  int width = 0, height = 0, n = 1, m = 1, subWidth = 0, subHeight = 0, stride = 0, pitch = 0, pad = 0;
+  int width = 0, height = 0, pitch = 0, pad = 0;
   size_t floats = 0;
   ShIgiPlanes() = default;
-  ShIgiPlanes(int width, int height, int n, int m, int stride, int fx, int fy);
+  ShIgiPlanes(int width, int height);
   size_t bytes() const { return floats * sizeof(float); }
-  // Float index of `plane` at packed slot `slot` (c·stride + sy·subWidth + sx).
-  size_t at(int plane, size_t slot) const {
-    size_t c = slot / size_t(stride), rest = slot % size_t(stride);
-    size_t sy = rest / size_t(subWidth), sx = rest % size_t(subWidth);
-    return size_t(pad) + ((c * size_t(subHeight) + sy) * kPlanes + size_t(plane)) * size_t(pitch) + sx;
+  // Float index of `plane` at camera pixel (x, y).
+  size_t at(int plane, int x, int y) const {
+    return size_t(pad) + (size_t(y) * kPlanes + size_t(plane)) * size_t(pitch) + size_t(x);
   }
 };
 
-// GI_VW of the sh-igi programs, and their launch range over a layout (sh_row in the kernels:
-// GI_VW slots of one sub-image row per work-item, sub-image fastest).
+// GI_VW of the sh-igi programs, and their launch range over a layout (sh_pixels in the kernels:
+// GI_VW consecutive pixels of one camera row per work-item, row-major).
 int shIgiVectorWidth(const cl::Context& ctx);
 cl::NDRange shIgiRange(const cl::Context& ctx, const ShIgiPlanes& layout);
 
-// The kernels of the filter and shading (sh_igi_keys, sh_igi_filter_shade of a program built with
-// GI_FX = fx, GI_FY = fy and GI_VW = shIgiVectorWidth), launched over `planes` whose coefficient planes are filled: keys from the
-// G-buffer, then filter + shade into `out` (float4 radiance per camera pixel).
-void shIgiFilterShade(cl::Context& ctx, cl::Kernel& keys, cl::Kernel& filter, const ShIgiPlanes& layout,
+// The filter and shading kernel of a program built with GI_FX = fx, GI_FY = fy and GI_VW =
+// shIgiVectorWidth — sh_igi_filter_shade (box) or, with `separable`, sh_igi_filter_shade_separable
+// (SH_FILTER_ROWS = kShIgiFilterRows rows per work-item) — launched over `planes` whose
+// coefficient and key planes are filled, into `out` (float4 radiance per camera pixel).
+constexpr int kShIgiFilterRows = 8;
+void shIgiFilterShade(cl::Context& ctx, cl::Kernel& filter, bool separable, const ShIgiPlanes& layout,
                       const GBuffer& g, const cl::Buffer& planes, float tauZ, float cosTauN, bool sameInstance,
                       bool glossy, cl::Buffer& out, const std::string& label = "sh-igi");
 }  // namespace gi

@@ -243,10 +243,9 @@ cl::NDRange InterleavedGather::copyRange() const {
   return cl::NDRange::d2(size_t(n_) * runs, cl::roundUp(size_t(m_) * subH_, rows), size_t(n_) * perGroup, rows);
 }
 
-void InterleavedGather::deinterleave(const GBuffer& g, bool geometricNormal) {
+void InterleavedGather::deinterleave(const GBuffer& g) {
   allocatePlanes();
-  deinterleave_.args(width_, height_, n_, m_, subPitch_, stride_, g.position, geometricNormal ? g.geoNormal : g.normal,
-                     planes_);
+  deinterleave_.args(width_, height_, n_, m_, subPitch_, stride_, g.position, g.normal, planes_);
   ctx_.launch(deinterleave_, copyRange(), prefix_ + ": de-interleave");
 }
 

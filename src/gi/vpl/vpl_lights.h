@@ -78,9 +78,8 @@ public:
   // `prefix` names the launches: "<prefix>: de-interleave", "<prefix>: shade", "<prefix>: re-interleave".
   InterleavedGather(cl::Context& ctx, std::string prefix);
   void resize(int width, int height, int n, int m);
-  // Normals: the shading normal (irradiance at the receiver, vpl/igi), or the geometric normal
-  // (sh-igi, whose receivers' hemisphere test must not see the normal map).
-  void deinterleave(const GBuffer& g, bool geometricNormal = false);
+  // Position and shading normal (the irradiance at the receiver) into the sub-image planes.
+  void deinterleave(const GBuffer& g);
   // `visibility` enabled: every pair is tested by a shadow ray (the visibility variant of the gather).
   void shade(const VplSet& vpls, const VplVisibility* visibility = nullptr);
   void reinterleaveRadiance(const GBuffer& g, cl::Buffer& out);  // L = ρ/π · E
