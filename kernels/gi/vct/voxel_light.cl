@@ -74,16 +74,13 @@ inline void vox_inject_prefetch(global const uint* acc, global const uint* occup
 #endif
 }
 
-// GI_VW consecutive entries of the occupied list per work-item (the list is in voxel order, so
+// GI_VW consecutive entries of the occupied list from `first` (the list is in voxel order, so
 // the lanes' records are near each other): vox_resolve, light_incident and shadow_visibility
-// lane-wise (common/lights_lanes.h), the lights uniform across lanes. Launched over N³ / GI_VW
-// items, as the count is on the device.
-kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const uint* occupied,
-                       global const uint* occupiedCount, global const GiLight* lights, int lightCount,
-                       global const GiView* shadowViews, global const uint* shadowOffsets,
-                       global const float* shadowDepths, global float4* level0) {
-  int first = get_global_id(0) * GI_VW, count = (int)occupiedCount[0];
-  if (first >= count) return;
+// lane-wise (common/lights_lanes.h), the lights uniform across lanes.
+inline void vox_inject_block(GiVoxelGrid grid, global const uint* acc, global const uint* occupied, int count,
+                             int first, global const GiLight* lights, int lightCount,
+                             global const GiView* shadowViews, global const uint* shadowOffsets,
+                             global const float* shadowDepths, global float4* level0) {
   int valid = min(GI_VW, count - first);
   vox_inject_prefetch(acc, occupied, count, first, level0);
   // Lanes past the end repeat the last entry (computed, not stored).
@@ -140,6 +137,24 @@ kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const ui
   int voxels[GI_VW];
   vstoreV(v, 0, voxels);
   for (int l = 0; l < valid; ++l) level0[voxels[l]] = (float4)(out[0][l], out[1][l], out[2][l], out[3][l]);
+}
+
+// The occupied list in blocks of GI_VW entries, each work-item a contiguous run of blocks (in
+// order, so that vox_inject_prefetch's look-ahead lands in its own run). The count is on the
+// device, so the launch cannot be sized to it: launched over N³ / GI_VW items with one block each,
+// only the first work-groups had work and PoCL ran nearly all of it on one of its two threads
+// (docs/PERFORMANCE.md, "Voxel light injection on both cores"). The host launches a fixed number of
+// items on CPU devices (VoxelScene::inject) and N³ / GI_VW on GPUs (one block each).
+kernel void vct_inject(GiVoxelGrid grid, global const uint* acc, global const uint* occupied,
+                       global const uint* occupiedCount, global const GiLight* lights, int lightCount,
+                       global const GiView* shadowViews, global const uint* shadowOffsets,
+                       global const float* shadowDepths, global float4* level0) {
+  int count = (int)occupiedCount[0];
+  int blocks = (count + GI_VW - 1) / GI_VW, items = (int)get_global_size(0);
+  int run = (blocks + items - 1) / items, b0 = (int)get_global_id(0) * run;
+  for (int b = b0; b < min(b0 + run, blocks); ++b)
+    vox_inject_block(grid, acc, occupied, count, b * GI_VW, lights, lightCount, shadowViews, shadowOffsets,
+                     shadowDepths, level0);
 }
 
 // The 8 children of parent cell `cell` in the volume of edge nc, child k = dx + 2·dy + 4·dz.

@@ -129,11 +129,16 @@ void VoxelScene::voxelize(const DeviceScene& scene, VoxelizeKernel kernel) {
   ctx_.launch(occupancyList_, cl::NDRange::d1(cl::roundUp(spans, 16), 16), "vct: occupied list");
 }
 
-void VoxelScene::inject(const DeviceScene& scene, const ShadowMapSet& shadows) {
+void VoxelScene::inject(const DeviceScene& scene, const ShadowMapSet& shadows, int cpuItems) {
   uint32_t n = uint32_t(voxelCount());
   inject_.args(grid_, acc_, occupied_, occupiedCount_, scene.lights, int(scene.lightCount), shadows.viewTable, shadows.offsetTable,
                shadows.depths, iso_);
-  ctx_.launch(inject_, cl::NDRange::d1(cl::roundUp((n + injectLanes_ - 1) / injectLanes_, 64), 64), "vct: inject");
+  // CPU (GI_VW > 1): a fixed number of work-items, each a run of the list (vct_inject); GPU: one
+  // block of the list per item, enough items for any count.
+  if (cpuItems < 1) throw Error("VoxelScene::inject: cpuItems = " + std::to_string(cpuItems) + ", expected >= 1");
+  size_t items = injectLanes_ > 1 ? size_t(cpuItems) : (n + injectLanes_ - 1) / injectLanes_;
+  size_t group = std::min<size_t>(items, 64);
+  ctx_.launch(inject_, cl::NDRange::d1(cl::roundUp(items, group), group), "vct: inject");
 }
 
 void VoxelScene::buildMips(bool anisotropic) {

@@ -44,8 +44,10 @@ public:
   enum class VoxelizeKernel { Lanes, Trianglewise };
   void voxelize(const DeviceScene& scene, VoxelizeKernel kernel = VoxelizeKernel::Lanes);
   // Level 0 of the occupied voxels: L = ρ/π·E_direct + L_e (premultiplied by opacity) from the
-  // lights and shadow maps; the other voxels stay zero.
-  void inject(const DeviceScene& scene, const ShadowMapSet& shadows);
+  // lights and shadow maps; the other voxels stay zero. On CPU devices `cpuItems` work-items share
+  // the occupied list in contiguous runs (vct_inject; fewer items = longer runs, for tests).
+  static constexpr int kInjectItemsCpu = 64 * 64;  // 64 groups: both cores busy whatever the count
+  void inject(const DeviceScene& scene, const ShadowMapSet& shadows, int cpuItems = kInjectItemsCpu);
   // Levels 1 … log2 N from level 0: isotropic (`iso`) or 6 directional volumes (`aniso`).
   // Level 0 must be zero wherever the occupancy bit is clear (as voxelize/inject/clear leave it):
   // the isotropic level 1 skips the children of parents without an occupied child.
@@ -76,7 +78,7 @@ private:
   cl::Context& ctx_;
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
-  int injectLanes_ = 1;  // GI_VW of lightProgram_ (occupied voxels per vct_inject work-item)
+  int injectLanes_ = 1;  // GI_VW of lightProgram_ (occupied voxels per vct_inject block)
   cl::Kernel clear_, occupancyCount_, scan_, occupancyList_, triangleColumns_, voxelize_, voxelizeTrianglewise_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
   // occupied_: the voxels the last voxelization touched (count in occupiedCount_), in increasing
   // order, built from their bits in occupancy_ (1 bit per voxel) through per-span counts.
