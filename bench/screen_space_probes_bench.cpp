@@ -10,12 +10,15 @@
 // seconds of this process (PoCL's worker threads included) over repeated calls, which other
 // processes' time slices do not inflate (shared caches still do, a little). On an idle machine
 // wall time ≈ CPU time / cores.
+// Kernel A/B under load: GI_AB_KERNEL_DIRS=DIR_A,DIR_B (see abKernelDirs) times two kernel trees
+// against each other in alternating calls after the device-time section.
 // Targets: ssao 16 samples + blur <= 4 ms; shading from the probes <= 5 ms; updating 256 probes x
 // 64 rays <= 100 ms (trace + blends + borders).
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -25,6 +28,7 @@
 #include "gi/probes/probes_technique.h"
 #include "gi/ssao/ssao_technique.h"
 #include "technique_timing.h"
+#include "util/error.h"
 
 using namespace gi;
 
@@ -36,17 +40,109 @@ double processCpuSeconds() {
   return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
-// Runs `pass` once to warm up, then `calls` times; prints CPU and wall milliseconds per call.
+// Runs `pass` once to warm up, then `calls` times; prints CPU and wall milliseconds per call, and
+// the smallest CPU time of a single call (each call finished before the next): other processes'
+// cache and core sharing only ever add to it, so under load the minimum is the steadier figure.
 void printCpuTime(cl::Context& ctx, const char* what, int calls, const std::function<void()>& pass) {
   pass();
   ctx.finish();
-  double cpu0 = processCpuSeconds();
+  double cpu0 = processCpuSeconds(), minCall = 1e30;
   auto wall0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < calls; ++i) pass();
-  ctx.finish();
+  for (int i = 0; i < calls; ++i) {
+    double c = processCpuSeconds();
+    pass();
+    ctx.finish();
+    minCall = std::min(minCall, processCpuSeconds() - c);
+  }
   double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  std::printf("  %-44s %8.2f CPU-ms per call (wall %.2f ms), %d calls\n", what,
-              1e3 * (processCpuSeconds() - cpu0) / calls, 1e3 * wall / calls, calls);
+  std::printf("  %-44s %8.2f CPU-ms per call (min %.2f; wall %.2f ms), %d calls\n", what,
+              1e3 * (processCpuSeconds() - cpu0) / calls, 1e3 * minCall, 1e3 * wall / calls, calls);
+}
+
+// Kernel A/B mode (GI_AB_KERNEL_DIRS="DIR_A,DIR_B", two kernel trees as for GI_KERNEL_DIR): the
+// judged passes are built once from each tree and called alternately in this one process, so
+// that both variants see the same load; prints the minimum, lower quartile and median CPU time per
+// call of each. Empty when the variable is unset; an error without the comma.
+std::vector<std::string> abKernelDirs() {
+  const char* e = std::getenv("GI_AB_KERNEL_DIRS");
+  if (!e) return {};
+  std::string s(e);
+  size_t c = s.find(',');
+  if (c == std::string::npos || c == 0 || c + 1 == s.size())
+    throw Error("GI_AB_KERNEL_DIRS = '" + s + "': expected two kernel folders, DIR_A,DIR_B");
+  return {s.substr(0, c), s.substr(c + 1)};
+}
+
+void printAlternatingCpuTimes(cl::Context& ctx, const char* what, int rounds,
+                              const std::vector<std::function<void()>>& variants) {
+  std::vector<std::vector<double>> ms(variants.size());
+  for (const auto& v : variants) v();
+  ctx.finish();
+  for (int r = 0; r < rounds; ++r)
+    for (size_t k = 0; k < variants.size(); ++k) {
+      double c = processCpuSeconds();
+      variants[k]();
+      ctx.finish();
+      ms[k].push_back(1e3 * (processCpuSeconds() - c));
+    }
+  for (size_t k = 0; k < variants.size(); ++k) {
+    std::sort(ms[k].begin(), ms[k].end());
+    std::printf("  %-44s %c: min %.2f, q25 %.2f, median %.2f CPU-ms per call (%d calls)\n", what, char('A' + k),
+                ms[k][0], ms[k][ms[k].size() / 4], ms[k][ms[k].size() / 2], rounds);
+  }
+}
+
+void runKernelAB(cl::Context& ctx, const Scene& scene, Renderer& frame, const std::vector<std::string>& dirs,
+                 bool runSsao, bool runProbes, int rounds) {
+  std::printf("\nkernel A/B, alternating calls: A = %s, B = %s\n", dirs[0].c_str(), dirs[1].c_str());
+  FrameResources f = frame.frameResources(true);
+  cl::Buffer indirect(ctx, size_t(frame.width()) * frame.height() * 16);
+  if (runSsao) {
+    SsaoSettings s = ssaoSettings(frame.params(), scene.bounds, true);
+    s.samples = 16;
+    s.bleeding = false;
+    for (int downsample : {1, 2}) {
+      s.downsample = downsample;
+      std::vector<std::unique_ptr<SsaoTechnique>> t;
+      for (const std::string& d : dirs) {
+        setenv("GI_KERNEL_DIR", d.c_str(), 1);
+        t.push_back(std::make_unique<SsaoTechnique>());
+        t.back()->setup(f);
+        t.back()->occlusionPass(f, s);  // builds the programs from this tree
+      }
+      std::vector<std::function<void()>> occlusion, blur;
+      for (auto& x : t) {
+        SsaoTechnique* p = x.get();
+        occlusion.push_back([&, p] { p->occlusionPass(f, s); });
+        blur.push_back([&, p] { p->blurComposePass(f, s, true, indirect); });
+      }
+      std::string d = downsample == 1 ? "" : ", downsample 2";
+      printAlternatingCpuTimes(ctx, ("ssao: planes + occlusion" + d).c_str(), rounds, occlusion);
+      printAlternatingCpuTimes(ctx, ("ssao: blur + compose" + d).c_str(), rounds, blur);
+    }
+  }
+  if (runProbes) {
+    for (int downsample : {1, 2}) {
+      std::vector<std::unique_ptr<ProbeField>> fields;
+      for (const std::string& d : dirs) {
+        setenv("GI_KERNEL_DIR", d.c_str(), 1);
+        ProbeSettings ps;
+        ps.downsample = downsample;
+        fields.push_back(std::make_unique<ProbeField>(ctx, scene, frame.deviceScene(), ps));
+        fields.back()->relocate(frame.deviceScene(), 4);
+        for (int i = 0; i < 4; ++i) fields.back()->update(frame.deviceScene(), 0.97f);
+      }
+      std::vector<std::function<void()>> shade;
+      for (auto& x : fields) {
+        ProbeField* p = x.get();
+        shade.push_back([&, p] { p->shade(frame.gbuffer(), indirect); });
+      }
+      printAlternatingCpuTimes(ctx, downsample == 1 ? "probes: shade, full resolution"
+                                                    : "probes: shade, half resolution + upsample",
+                               rounds, shade);
+    }
+  }
+  unsetenv("GI_KERNEL_DIR");
 }
 
 // A direct-light frame: the G-buffer the passes below read.
@@ -92,6 +188,10 @@ int main(int argc, char** argv) {
     }
     std::unique_ptr<Renderer> frame = directFrame(ctx, scene, a);
     const int calls = 3 * a.frames;
+    if (std::vector<std::string> dirs = abKernelDirs(); !dirs.empty()) {
+      runKernelAB(ctx, scene, *frame, dirs, runSsao, runProbes, 10 * a.frames);
+      return 0;
+    }
     if (runSsao) {
       std::printf("\nprocess CPU time (load-independent up to shared caches):\n");
       FrameResources f = frame->frameResources(true);

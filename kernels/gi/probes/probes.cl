@@ -252,9 +252,11 @@ __attribute__((always_inline)) inline void probe_octahedral_footprintV(floatV dx
   floatV qx = GI_SEL(px, (1.0f - fabs(py)) * GI_SEL(minusOne, one, px >= 0.0f), lower);
   floatV qy = GI_SEL(py, (1.0f - fabs(px)) * GI_SEL(minusOne, one, py >= 0.0f), lower);
   floatV fx = (qx * 0.5f + 0.5f) * (float)res + 0.5f, fy = (qy * 0.5f + 0.5f) * (float)res + 0.5f;
-  // A NaN direction (background lanes) is clamped to texel 0: in range, and not stored.
-  intV x0 = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(fx), fx == fx)), 0, res);
-  intV y0 = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(fy), fy == fy)), 0, res);
+  // fx, fy > −1 for every direction (|q| <= 1 up to rounding), where truncation and the clamp to
+  // 0 … res give floor's texel; a NaN direction (background lanes) converts to some integer that
+  // the clamp puts in range (its result is not stored).
+  intV x0 = clamp(convert_intV(fx), 0, res);
+  intV y0 = clamp(convert_intV(fy), 0, res);
   *tx = clamp(fx - convert_floatV(x0), 0.0f, 1.0f);
   *ty = clamp(fy - convert_floatV(y0), 0.0f, 1.0f);
   *offset = y0 * (res + 2) + x0;
@@ -386,6 +388,20 @@ __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiPr
   return f3v(b.Ex * inv, b.Ey * inv, b.Ez * inv);
 }
 
+#if GI_VW > 1
+// The float4 records of the even ones of 2·GI_VW consecutive pixels from p, as four floatV.
+#define PROBE_LOAD_EVEN4(p, X, Y, Z, W)                                     \
+  {                                                                         \
+    floatV x0_, y0_, z0_, w0_, x1_, y1_, z1_, w1_;                          \
+    GI_AOS4_LOAD(p, x0_, y0_, z0_, w0_)                                     \
+    GI_AOS4_LOAD((p) + 4 * GI_VW, x1_, y1_, z1_, w1_)                       \
+    X = (floatV)(x0_.even, x1_.even);                                       \
+    Y = (floatV)(y0_.even, y1_.even);                                       \
+    Z = (floatV)(z0_.even, z1_.even);                                       \
+    W = (floatV)(w0_.even, w1_.even);                                       \
+  }
+#endif
+
 // One work-item: GI_VW adjacent pixels (u, v) of a (⌈W/down⌉ × ⌈H/down⌉) image, pixel (u, v)
 // evaluated at camera pixel (u·down, v·down): down = 1 writes the indirect radiance ρ/π · E,
 // down > 1 writes E for the geometry-aware upsampler (gi/filters). Background: 0.
@@ -400,7 +416,6 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   size_t row = (size_t)min(v * down, camera.height - 1) * camera.width;
   // Camera pixel of each lane (lanes past the end repeat the last valid one).
   intV px = min(min((intV)(u0) + (intV)(GI_LANES), (intV)(u0 + valid - 1)) * down, camera.width - 1);
-  // One 128-bit load per lane and G-buffer record.
   intV i = convert_intV(px) + (int)row;
   global const float* P = (global const float*)gPosition;
   global const float* G = (global const float*)gGeoNormal;
@@ -408,9 +423,25 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   global const float* A = (global const float*)gAlbedo;
   floatV pw, unused;
   float3V x, ng, n, alb;
-  GI_GATHER_AOS4(float, P, i, x.x, x.y, x.z, pw)
-  GI_GATHER_AOS4(float, G, i, ng.x, ng.y, ng.z, unused)
-  GI_GATHER_AOS4(float, N, i, n.x, n.y, n.z, unused)
+  // The lanes' G-buffer records: a whole block's are contiguous vector loads (down = 2: the
+  // 2·GI_VW camera pixels from 2·u0, the even ones kept), else one 128-bit load per lane.
+#if GI_VW > 1
+  size_t first = row + (size_t)u0 * down;
+  if (valid == GI_VW && down == 1) {
+    GI_AOS4_LOAD(P + 4 * first, x.x, x.y, x.z, pw)
+    GI_AOS4_LOAD(G + 4 * first, ng.x, ng.y, ng.z, unused)
+    GI_AOS4_LOAD(N + 4 * first, n.x, n.y, n.z, unused)
+  } else if (valid == GI_VW && down == 2 && 2 * (u0 + GI_VW) <= camera.width) {
+    PROBE_LOAD_EVEN4(P + 4 * first, x.x, x.y, x.z, pw)
+    PROBE_LOAD_EVEN4(G + 4 * first, ng.x, ng.y, ng.z, unused)
+    PROBE_LOAD_EVEN4(N + 4 * first, n.x, n.y, n.z, unused)
+  } else
+#endif
+  {
+    GI_GATHER_AOS4(float, P, i, x.x, x.y, x.z, pw)
+    GI_GATHER_AOS4(float, G, i, ng.x, ng.y, ng.z, unused)
+    GI_GATHER_AOS4(float, N, i, n.x, n.y, n.z, unused)
+  }
   float3V wo;
   if (camera.orthographic) {
     float3 w = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
