@@ -240,8 +240,9 @@ kernel void sh_igi_project(int width, int height, int n, int m, int pitch, int p
 #ifndef GI_FY
 #define GI_FY 4
 #endif
-// Output rows per work-item of the separable filter: its row pass covers SH_FILTER_ROWS + GI_FY − 1
-// rows, kept in private memory for the column pass.
+// Output rows per work-item of both filters: the row sums (box) or the row pass (separable) of
+// the SH_FILTER_ROWS + GI_FY − 1 rows their windows cover are kept in private memory (19 KB at 16
+// lanes and GI_FY = 4; with 16 rows the 33 KB no longer fit L1 and it was slower).
 #define SH_FILTER_ROWS 8  // host: kShIgiFilterRows
 
 // The filter's keys of GI_VW consecutive pixels: `q` is plane 0 of their row block at their first pixel.
@@ -372,56 +373,95 @@ inline void sh_write(const ShShading* s, const floatV* diffuse, const floatV* sp
   }
 }
 
-// Box filter + shade (`sh-igi.filter=box`). Window offset (dx, dy) of the work-item's pixels is one
-// (unaligned) vector load per plane at a fixed offset from the work-item's first pixel. Weights
-// (§3 test, dy outer, dx inner: the host mirror's order) first, then the coefficients channel by
-// channel — 9 accumulators live instead of 27 — folded into the zonal shading sums.
+// Box filter + shade (`sh-igi.filter=box`). A work-item takes GI_VW pixels of SH_FILTER_ROWS rows.
+// Window offset (dx, dy) of its pixels is one (unaligned) vector load per plane at a fixed
+// offset from their first pixel. The weights (§3 test, dy outer, dx inner: the host mirror's
+// order) come first; then, per window row, a row whose GI_FX offsets every lane accepts adds the
+// row's plain sum of the GI_FX columns — computed once per work-item for every row its windows
+// cover, shared by the GI_FY output rows that read it — and any other row adds its accepted
+// offsets one by one (a row no lane accepts adds nothing). The same box, in a different summation
+// order for the clean rows (a rounding difference); GI_FY row sums instead of GI_FX · GI_FY
+// offsets where no test rejects. Channel by channel, 9 accumulators live, folded into the zonal
+// shading sums.
 kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, global const float* planes,
                                 global const float* gPosition, global const float* gNormal,
                                 global const float* gAlbedo, global const float* gSpecular, GiView camera,
                                 float tauZ, float cosTauN, int sameInstance, int glossy, global float* out) {
-  int x0, y;
-  if (!sh_pixels(width, height, &x0, &y)) return;
+  int columns = (width + GI_VW - 1) / GI_VW, id = get_global_id(0);
+  int y0 = id / columns * SH_FILTER_ROWS, x0 = (id - id / columns * columns) * GI_VW;
+  if (y0 >= height) return;
   intV x = x0 + GI_LANES;
   size_t blockSize = (size_t)SH_PLANES * pitch;
-  global const float* base = planes + pad + (size_t)y * blockSize + x0;
-  ShKeys c = sh_keys(base, pitch, tauZ);
-  floatV w[GI_FX * GI_FY];
-  long off[GI_FX * GI_FY];  // window offset q relative to this work-item's first pixel, in floats
-  floatV ws = (floatV)(0.0f);
+  float rowSum[SH_FILTER_ROWS + GI_FY - 1][SH_C][GI_VW];
+  for (int r = 0; r < SH_FILTER_ROWS + GI_FY - 1; ++r) {
+    int qy = y0 - GI_FY / 2 + r;
+    if (qy < 0 || qy >= height) continue;  // never read: no lane accepts a row outside the image
+    global const float* base = planes + pad + (size_t)qy * blockSize + x0;
 #pragma unroll
-  for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
-    // Rows outside the image: weight 0, and the loads go to the own row (finite values; the
-    // buffer holds no rows above the first or below the last).
-    bool rowInside = y + dy >= 0 && y + dy < height;
+    for (int k = 0; k < SH_C; ++k) {
+      global const float* plane = base + (size_t)k * pitch;
+      floatV sum = vloadV(0, plane - GI_FX / 2);
 #pragma unroll
-    for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
-      int q = (dy + GI_FY / 2) * GI_FX + dx + GI_FX / 2;
-      off[q] = (rowInside ? (long)dy * (long)blockSize : 0) + dx;
-      w[q] = rowInside ? sh_weight(base + off[q], pitch, c, x + dx, width, cosTauN, sameInstance) : (floatV)(0.0f);
-      ws += w[q];
+      for (int dx = 1 - GI_FX / 2; dx < GI_FX - GI_FX / 2; ++dx) sum += vloadV(0, plane + dx);
+      vstoreV(sum, 0, rowSum[r][k]);
     }
   }
-  // The centre pixel always passes its own test unless it is background; ws = 0 only there.
-  floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
-  ShShading s;
-  sh_shading(width, x0, y, c.id, gPosition, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
-  floatV diffuse[3], specular[3];
-  for (int ch = 0; ch < 3; ++ch) {
-    global const float* channel = base + (size_t)ch * SH_N * pitch;
-    floatV acc[SH_N];
+  for (int r = 0; r < SH_FILTER_ROWS; ++r) {
+    int y = y0 + r;
+    if (y >= height) break;
+    global const float* base = planes + pad + (size_t)y * blockSize + x0;
+    ShKeys c = sh_keys(base, pitch, tauZ);
+    floatV w[GI_FX * GI_FY];
+    long off[GI_FX * GI_FY];  // window offset q relative to the work-item's first pixel in row y, in floats
+    bool clean[GI_FY], empty[GI_FY];  // window row dy: every lane accepts every offset / none accepts any
+    floatV ws = (floatV)(0.0f);
 #pragma unroll
-    for (int k = 0; k < SH_N; ++k) acc[k] = (floatV)(0.0f);
+    for (int dy = -(GI_FY / 2); dy < GI_FY - GI_FY / 2; ++dy) {
+      int j = dy + GI_FY / 2;
+      bool rowInside = y + dy >= 0 && y + dy < height;
+      floatV rowWeight = (floatV)(0.0f), rowAll = (floatV)(1.0f);
 #pragma unroll
-    for (int q = 0; q < GI_FX * GI_FY; ++q) {
-      floatV wq = w[q];
-      global const float* src = channel + off[q];
-#pragma unroll
-      for (int k = 0; k < SH_N; ++k) acc[k] += wq * vloadV(0, src + (size_t)k * pitch);
+      for (int dx = -(GI_FX / 2); dx < GI_FX - GI_FX / 2; ++dx) {
+        int q = j * GI_FX + dx + GI_FX / 2;
+        off[q] = (long)dy * (long)blockSize + dx;
+        w[q] = rowInside ? sh_weight(base + off[q], pitch, c, x + dx, width, cosTauN, sameInstance) : (floatV)(0.0f);
+        ws += w[q];
+        rowWeight += w[q];
+        rowAll = fmin(rowAll, w[q]);
+      }
+      clean[j] = GI_ALL(rowAll > 0.0f);
+      empty[j] = !GI_ANY(rowWeight > 0.0f);
     }
-    sh_fold(&s, acc, &diffuse[ch], &specular[ch]);
+    // The centre pixel always passes its own test unless it is background; ws = 0 only there.
+    floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
+    ShShading s;
+    sh_shading(width, x0, y, c.id, gPosition, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
+    floatV diffuse[3], specular[3];
+    for (int ch = 0; ch < 3; ++ch) {
+      global const float* channel = base + (size_t)ch * SH_N * pitch;
+      floatV acc[SH_N];
+#pragma unroll
+      for (int k = 0; k < SH_N; ++k) acc[k] = (floatV)(0.0f);
+#pragma unroll
+      for (int j = 0; j < GI_FY; ++j) {
+        if (clean[j]) {
+#pragma unroll
+          for (int k = 0; k < SH_N; ++k) acc[k] += vloadV(0, rowSum[r + j][ch * SH_N + k]);
+        } else if (!empty[j]) {
+#pragma unroll
+          for (int i = 0; i < GI_FX; ++i) {
+            int q = j * GI_FX + i;
+            floatV wq = w[q];
+            global const float* src = channel + off[q];
+#pragma unroll
+            for (int k = 0; k < SH_N; ++k) acc[k] += wq * vloadV(0, src + (size_t)k * pitch);
+          }
+        }
+      }
+      sh_fold(&s, acc, &diffuse[ch], &specular[ch]);
+    }
+    sh_write(&s, diffuse, specular, inv, glossy, width, x0, y, out);
   }
-  sh_write(&s, diffuse, specular, inv, glossy, width, x0, y, out);
 }
 
 // Separable filter + shade (`sh-igi.filter=separable`, the thesis's separable blur as for igi):

@@ -137,13 +137,11 @@ void shIgiFilterShade(cl::Context& ctx, cl::Kernel& filter, bool separable, cons
                       cl::Buffer& out, const std::string& label) {
   filter.args(l.width, l.height, l.pitch, l.pad, planes, g.position, g.normal, g.albedo, g.specular, g.view, tauZ,
               cosTauN, int(sameInstance), int(glossy), out);
-  if (separable) {
-    const size_t columns = size_t(l.width + shIgiVectorWidth(ctx) - 1) / size_t(shIgiVectorWidth(ctx));
-    const size_t blocks = size_t(l.height + kShIgiFilterRows - 1) / kShIgiFilterRows;
-    ctx.launch(filter, cl::NDRange::d1(cl::roundUp(columns * blocks, 4), 4), label + ": filter + shade (separable)");
-  } else {
-    ctx.launch(filter, shIgiRange(ctx, l), label + ": filter + shade");
-  }
+  // GI_VW pixels of kShIgiFilterRows rows per work-item, row-major.
+  const size_t columns = size_t(l.width + shIgiVectorWidth(ctx) - 1) / size_t(shIgiVectorWidth(ctx));
+  const size_t blocks = size_t(l.height + kShIgiFilterRows - 1) / kShIgiFilterRows;
+  ctx.launch(filter, cl::NDRange::d1(cl::roundUp(columns * blocks, 4), 4),
+             label + (separable ? ": filter + shade (separable)" : ": filter + shade"));
 }
 
 TechniqueInfo shIgiTechniqueInfo() {

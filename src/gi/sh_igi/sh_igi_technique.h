@@ -31,8 +31,8 @@ int shIgiVectorWidth(const cl::Context& ctx);
 cl::NDRange shIgiRange(const cl::Context& ctx, const ShIgiPlanes& layout);
 
 // The filter and shading kernel of a program built with GI_FX = fx, GI_FY = fy and GI_VW =
-// shIgiVectorWidth — sh_igi_filter_shade (box) or, with `separable`, sh_igi_filter_shade_separable
-// (SH_FILTER_ROWS = kShIgiFilterRows rows per work-item) — launched over `planes` whose
+// shIgiVectorWidth — sh_igi_filter_shade (box) or, with `separable`, sh_igi_filter_shade_separable,
+// both SH_FILTER_ROWS = kShIgiFilterRows rows per work-item — launched over `planes` whose
 // coefficient and key planes are filled, into `out` (float4 radiance per camera pixel).
 constexpr int kShIgiFilterRows = 8;
 void shIgiFilterShade(cl::Context& ctx, cl::Kernel& filter, bool separable, const ShIgiPlanes& layout,
