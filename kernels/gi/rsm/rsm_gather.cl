@@ -123,26 +123,196 @@ inline floatV rsm_min(floatV a, floatV b) { return GI_SEL(b, a, a < b); }
 #define GI_RSM_ROWS 4
 #endif
 
-// offsets: float2 per sample in texels; weights: float per sample (2π r_max² ξ1 / N).
-// records: rsm_pack's output. `ortho` is a compile-time constant in the two kernels below.
+// Block sums prefetch the record RSM_PREFETCH samples ahead (CPUs): the loop is short enough that
+// out-of-order execution no longer hides the record loads' misses (−35 % CPU time on Sponza).
+#define RSM_PREFETCH 8
+
+// Sample centre per block (rsm.sample_centre=block): a block is GI_RSM_BLOCK_W low-resolution
+// pixels of the work-item's GI_RSM_ROWS rows; its kernels need GI_VW to divide GI_RSM_BLOCK_W.
+#ifndef GI_RSM_BLOCK_W
+#define GI_RSM_BLOCK_W 8
+#endif
+#define RSM_BLOCK_PIXELS (GI_RSM_BLOCK_W * GI_RSM_ROWS)
+// Projections are clamped to ±2^20 texels before they become integers (receivers far outside
+// the RSM: their samples all read the border anyway).
+#define RSM_TEXEL_LIMIT 1048576.0f
+
+// The per-row state of the receivers: RSM coordinates (sx, sy), the terms of u = receiver −
+// texel (cx, cy, dr; see rsm_gather_rows) and −n in the light's view space.
+typedef struct {
+  floatV sx, sy, cx, cy, dr, nx, ny, nz;
+} RsmReceivers;
+
+// The receivers' projection into the RSM, (sx, sy) in texels, from a position (column-major
+// view_proj M). One formula for the vector rows and the scalar block-centre search.
+#define RSM_PROJECT(M, res, px, py, pz, sx, sy, ONE)                                 \
+  {                                                                                 \
+    __typeof__(px) hx_ = M[0] * px + M[4] * py + M[8] * pz + M[12];                 \
+    __typeof__(px) hy_ = M[1] * px + M[5] * py + M[9] * pz + M[13];                 \
+    __typeof__(px) hw_ = M[3] * px + M[7] * py + M[11] * pz + M[15];                \
+    __typeof__(px) invW_ = 1.0f / GI_SEL(hw_, ONE, hw_ == 0.0f);                    \
+    sx = (hx_ * invW_ * 0.5f + 0.5f) * (float)(res);                                \
+    sy = (0.5f - hy_ * invW_ * 0.5f) * (float)(res);                                \
+  }
+
+// Per-pixel centres (rsm.sample_centre=pixel, the paper's form): every sample is the texel
+// floor(s + o) of the receiver's own projection s, one per-lane record load per sample and row.
+inline __attribute__((always_inline)) void rsm_pixel_centre_sum(
+    const RsmReceivers* R, int res, float ts, global const int* records, int sBegin, int sEnd,
+    global const float2* offsets, global const float* weights, float dminOverride, floatV* er, floatV* eg, floatV* eb,
+    const int ortho) {
+  int pitch = res + 2;
+  float fixedDmin2 = dminOverride * dminOverride;
+  // Perspective texel centre: x_view = d·(ts·t + lateral), y_view = −d·(ts·t' + lateral).
+  float lateral = ts * (0.5f - 0.5f * (float)res);
+  // Texel coordinates are clamped to [−1, res]: samples outside the RSM read the border.
+  floatV loClamp = (floatV)(-1.0f), hiClamp = (floatV)((float)res), zero = (floatV)(0.0f);
+  for (int s = sBegin; s < sEnd; ++s) {
+    float2 o = offsets[s];
+    float w = weights[s];
+#pragma unroll
+    for (int r = 0; r < GI_RSM_ROWS; ++r) {
+      floatV fx = RSM_FLOOR(rsm_min(rsm_max(R[r].sx + o.x, loClamp), hiClamp));
+      floatV fy = RSM_FLOOR(rsm_min(rsm_max(R[r].sy + o.y, loClamp), hiClamp));
+      uintV t = convert_uintV(convert_intV(fy) * pitch + convert_intV(fx) + (pitch + 1));
+      intV w0, w1, w2, w3;
+      GI_GATHER_AOS4(int, records, t, w0, w1, w2, w3)
+      floatV d = as_floatV(w0);
+      floatV ux, uy;
+      if (ortho) {
+        ux = R[r].cx - ts * fx;
+        uy = R[r].cy + ts * fy;
+      } else {
+        ux = R[r].cx - d * (ts * fx + lateral);
+        uy = R[r].cy + d * (ts * fy + lateral);
+      }
+      floatV uz = d - R[r].dr;
+      floatV mx = convert_floatV(((w1) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
+      floatV my = convert_floatV(((w2) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
+      floatV mz = convert_floatV(((w3) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
+      floatV d2 = ux * ux + uy * uy + uz * uz;
+      floatV cp = mx * ux + my * uy + mz * uz;
+      floatV cr = R[r].nx * ux + R[r].ny * uy + R[r].nz * uz;
+      floatV dmin2;
+      if (dminOverride > 0.0f) {
+        dmin2 = (floatV)(fixedDmin2);
+      } else if (ortho) {
+        dmin2 = (floatV)(0.25f * ts * ts);
+      } else {
+        dmin2 = (0.25f * ts * ts) * d * d;
+      }
+      floatV g = rsm_max(cp, zero) * rsm_max(cr, zero) * w / (rsm_max(d2, (floatV)(1e-20f)) * rsm_max(d2, dmin2));
+      er[r] += as_floatV(w1) * g;
+      eg[r] += as_floatV(w2) * g;
+      eb[r] += as_floatV(w3) * g;
+    }
+  }
+}
+
+// One centre texel c for the whole block (rsm.sample_centre=block): sample s is the texel
+// c + D_s with D_s = floor(o_s + ½) (the pattern around c's texel centre), the same record for
+// every lane and row: one scalar 16-byte load and decode per sample, broadcast to the block's
+// GI_VW × GI_RSM_ROWS receivers (the `vpl` gather's form). The weights are the pattern's, so the
+// estimate is unbiased for the disc around c instead of around each receiver's own projection.
+inline __attribute__((always_inline)) void rsm_block_centre_sum(
+    int2 centre, const RsmReceivers* R, int res, float ts, global const int4* records, int sBegin, int sEnd,
+    global const int2* blockOffsets, global const float* weights, float dminOverride, floatV* er, floatV* eg,
+    floatV* eb, const int ortho) {
+  int pitch = res + 2;
+  float lateral = ts * (0.5f - 0.5f * (float)res);
+  floatV zero = (floatV)(0.0f);
+  for (int s = sBegin; s < sEnd; ++s) {
+#if GI_VW > 1
+    {
+      int2 q = blockOffsets[min(s + RSM_PREFETCH, sEnd - 1)];
+      __builtin_prefetch(records + (clamp(centre.y + q.y, -1, res) + 1) * pitch + clamp(centre.x + q.x, -1, res) + 1);
+    }
+#endif
+    int2 o = blockOffsets[s];
+    int tx = clamp(centre.x + o.x, -1, res), ty = clamp(centre.y + o.y, -1, res);
+    int4 rec = records[(ty + 1) * pitch + tx + 1];
+    float d = as_float(rec.x), w = weights[s];
+    float mx = (float)((rec.y << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
+    float my = (float)((rec.z << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
+    float mz = (float)((rec.w << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
+    float fr = as_float(rec.y) * w, fg = as_float(rec.z) * w, fb = as_float(rec.w) * w;
+    // The texel's lateral terms: ux = cx − px, uy = cy + py (see rsm_gather_rows).
+    float px = ortho ? ts * (float)tx : d * (ts * (float)tx + lateral);
+    float py = ortho ? ts * (float)ty : d * (ts * (float)ty + lateral);
+    float dmin2 = dminOverride > 0.0f ? dminOverride * dminOverride : (ortho ? 0.25f * ts * ts : (0.25f * ts * ts) * d * d);
+#pragma unroll
+    for (int r = 0; r < GI_RSM_ROWS; ++r) {
+      floatV ux = R[r].cx - px, uy = R[r].cy + py, uz = d - R[r].dr;
+      floatV d2 = ux * ux + uy * uy + uz * uz;
+      floatV cp = mx * ux + my * uy + mz * uz;
+      floatV cr = R[r].nx * ux + R[r].ny * uy + R[r].nz * uz;
+      floatV g = rsm_max(cp, zero) * rsm_max(cr, zero) / (rsm_max(d2, (floatV)(1e-20f)) * rsm_max(d2, (floatV)(dmin2)));
+      er[r] += fr * g;
+      eg[r] += fg * g;
+      eb[r] += fb * g;
+    }
+  }
+}
+
+// The block's centre texel: the floored projection of one of its surface receivers, the one
+// within `tolerance` texels (in x and in y) of the most others — candidates in a fixed order,
+// starting near the block's middle, stopping at the first that covers all. Receivers beyond the
+// tolerance from it use their own centres. Scalar and over the whole block, so the choice does
+// not depend on GI_VW. *found = 0 when the block has no surface.
+inline int2 rsm_block_centre(int width, int height, int lowWidth, int lowHeight, global const float* gPosition,
+                             const float* M, int res, int bu0, int bv0, int tolerance, int* found) {
+  int tx[RSM_BLOCK_PIXELS], ty[RSM_BLOCK_PIXELS], n = 0;
+  for (int r = 0; r < GI_RSM_ROWS; ++r) {
+    for (int c = 0; c < GI_RSM_BLOCK_W; ++c) {
+      int u = bu0 + c, v = bv0 + r;
+      if (u >= lowWidth || v >= lowHeight) continue;
+      float4 p = vload4((size_t)min(v * GI_DOWN, height - 1) * width + min(u * GI_DOWN, width - 1), gPosition);
+      if (!(p.w > 0.0f)) continue;
+      float sx, sy;
+      RSM_PROJECT(M, res, p.x, p.y, p.z, sx, sy, 1.0f)
+      tx[n] = (int)floor(fmin(fmax(sx, -RSM_TEXEL_LIMIT), RSM_TEXEL_LIMIT));
+      ty[n] = (int)floor(fmin(fmax(sy, -RSM_TEXEL_LIMIT), RSM_TEXEL_LIMIT));
+      ++n;
+    }
+  }
+  *found = n > 0;
+  if (n == 0) return (int2)(0, 0);
+  int start = (n / 2 + GI_RSM_BLOCK_W / 2) % n, best = start, bestCount = 0;
+  for (int j = 0; j < n && bestCount < n; ++j) {
+    int k = (start + j) % n, count = 0;
+    for (int i = 0; i < n; ++i) count += abs(tx[i] - tx[k]) <= tolerance && abs(ty[i] - ty[k]) <= tolerance;
+    if (count > bestCount) {
+      bestCount = count;
+      best = k;
+    }
+  }
+  return (int2)(tx[best], ty[best]);
+}
+
+// offsets: float2 per sample in texels; weights: float per sample (2π r_max² ξ1 / N);
+// blockOffsets: int2 per sample, floor(offset + ½) (block kernels only). records: rsm_pack's
+// output. `ortho` and `block` are compile-time constants in the kernels below.
 inline void rsm_gather_rows(int width, int height, int lowWidth, int lowHeight, global const float* gPosition,
                             global const float* gNormal, const GiView* rsmView, global const int* records,
                             int samples, global const float2* offsets, global const float* weights,
-                            float dminOverride, int accumulate, global float4* lowIrradiance, const int ortho) {
+                            global const int2* blockOffsets, int tolerance, int innerSamples, float dminOverride,
+                            int accumulate,
+                            global float4* lowIrradiance, const int ortho, const int block) {
   int gx = get_global_id(0), v0 = get_global_id(1) * GI_RSM_ROWS;
   int u0 = gx * GI_VW;
   if (u0 >= lowWidth || v0 >= lowHeight) return;
   intV uc = min(u0 + GI_LANES, lowWidth - 1);
   const float* M = rsmView->view_proj;
   const float* V = rsmView->view;
-  int res = rsmView->width, pitch = res + 2;
+  int res = rsmView->width;
   float ts = rsmView->texel_world_size;
   // Per row: the receiver's RSM coordinates (sx, sy) and its position in the light's view space.
   // For texel column t: orthographic ux = xv − x_texel = ts·(sx − ½ − t) = cx − ts·t;
   // perspective ux = xv − d_texel·ts·(t + ½ − res/2) = xv − d_texel·(ts·t + lateral). uy likewise
   // with the texel rows running down (y_view decreasing). uz = d_texel − d_receiver.
-  floatV sx[GI_RSM_ROWS], sy[GI_RSM_ROWS], cx[GI_RSM_ROWS], cy[GI_RSM_ROWS], dr[GI_RSM_ROWS], nx[GI_RSM_ROWS],
-      ny[GI_RSM_ROWS], nz[GI_RSM_ROWS], er[GI_RSM_ROWS], eg[GI_RSM_ROWS], eb[GI_RSM_ROWS], keep[GI_RSM_ROWS];
+  RsmReceivers R[GI_RSM_ROWS];
+  floatV er[GI_RSM_ROWS], eg[GI_RSM_ROWS], eb[GI_RSM_ROWS], keep[GI_RSM_ROWS];
+  intV surface[GI_RSM_ROWS];
   intV anySurface = (intV)(0);
 #pragma unroll
   for (int r = 0; r < GI_RSM_ROWS; ++r) {
@@ -151,72 +321,64 @@ inline void rsm_gather_rows(int width, int height, int lowWidth, int lowHeight, 
     floatV px, py, pz, pw, wx, wy, wz, unused;
     GI_GATHER_AOS4(float, gPosition, pix, px, py, pz, pw)
     GI_GATHER_AOS4(float, gNormal, pix, wx, wy, wz, unused)
-    // Project into the RSM (column-major view_proj).
-    floatV hx = M[0] * px + M[4] * py + M[8] * pz + M[12];
-    floatV hy = M[1] * px + M[5] * py + M[9] * pz + M[13];
-    floatV hw = M[3] * px + M[7] * py + M[11] * pz + M[15];
-    floatV invW = 1.0f / GI_SEL(hw, (floatV)(1.0f), hw == 0.0f);
-    sx[r] = (hx * invW * 0.5f + 0.5f) * (float)res;
-    sy[r] = (0.5f - hy * invW * 0.5f) * (float)res;
+    RSM_PROJECT(M, res, px, py, pz, R[r].sx, R[r].sy, (floatV)(1.0f))
     floatV xv = V[0] * px + V[4] * py + V[8] * pz + V[12];
     floatV yv = V[1] * px + V[5] * py + V[9] * pz + V[13];
-    dr[r] = -(V[2] * px + V[6] * py + V[10] * pz + V[14]);
-    cx[r] = ortho ? ts * (sx[r] - 0.5f) : xv;
-    cy[r] = ortho ? ts * (0.5f - sy[r]) : yv;
+    R[r].dr = -(V[2] * px + V[6] * py + V[10] * pz + V[14]);
+    R[r].cx = ortho ? ts * (R[r].sx - 0.5f) : xv;
+    R[r].cy = ortho ? ts * (0.5f - R[r].sy) : yv;
     // −n in view space: cos at the receiver = −n·u.
-    nx[r] = -(V[0] * wx + V[4] * wy + V[8] * wz);
-    ny[r] = -(V[1] * wx + V[5] * wy + V[9] * wz);
-    nz[r] = -(V[2] * wx + V[6] * wy + V[10] * wz);
+    R[r].nx = -(V[0] * wx + V[4] * wy + V[8] * wz);
+    R[r].ny = -(V[1] * wx + V[5] * wy + V[9] * wz);
+    R[r].nz = -(V[2] * wx + V[6] * wy + V[10] * wz);
     er[r] = eg[r] = eb[r] = (floatV)(0.0f);
     keep[r] = GI_SEL((floatV)(0.0f), (floatV)(GI_INV_PI), pw > 0.0f);
-    anySurface |= pw > 0.0f;
+    surface[r] = pw > 0.0f;
+    anySurface |= surface[r];
   }
-  if (GI_ANY(anySurface)) {
-    float fixedDmin2 = dminOverride * dminOverride;
-    // Perspective texel centre: x_view = d·(ts·t + lateral), y_view = −d·(ts·t' + lateral).
-    float lateral = ts * (0.5f - 0.5f * (float)res);
-    // Texel coordinates are clamped to [−1, res]: samples outside the RSM read the border.
-    floatV loClamp = (floatV)(-1.0f), hiClamp = (floatV)((float)res), zero = (floatV)(0.0f);
-    for (int s = 0; s < samples; ++s) {
-      float2 o = offsets[s];
-      float w = weights[s];
+  if (block) {
+    int found;
+    int2 c = rsm_block_centre(width, height, lowWidth, lowHeight, gPosition, M, res,
+                              (u0 / GI_RSM_BLOCK_W) * GI_RSM_BLOCK_W, v0, tolerance, &found);
+    // Receivers whose own texel is beyond the tolerance from c (other surfaces, e.g. across a
+    // depth edge) are gathered around their own projections, as in the per-pixel form.
+    intV own[GI_RSM_ROWS];
+    intV anyOwn = (intV)(0), anyShared = (intV)(0);
+    floatV cxf = (floatV)((float)c.x), cyf = (floatV)((float)c.y), tol = (floatV)((float)tolerance);
+    floatV lim = (floatV)(RSM_TEXEL_LIMIT);
+#pragma unroll
+    for (int r = 0; r < GI_RSM_ROWS; ++r) {
+      floatV tx = floor(fmin(fmax(R[r].sx, -lim), lim)), ty = floor(fmin(fmax(R[r].sy, -lim), lim));
+      own[r] = surface[r] & (fabs(tx - cxf) > tol || fabs(ty - cyf) > tol);
+      anyOwn |= own[r];
+      anyShared |= surface[r] & ~own[r];
+    }
+    // The first innerSamples samples (the host puts those of radius < rsm.block_inner × r_max
+    // first) around every receiver's own projection, the rest around c (or, for receivers beyond
+    // the tolerance, around their own projections too).
+    if (GI_ANY(anySurface) && innerSamples > 0)
+      rsm_pixel_centre_sum(R, res, ts, records, 0, innerSamples, offsets, weights, dminOverride, er, eg, eb, ortho);
+    floatV pr[GI_RSM_ROWS], pg[GI_RSM_ROWS], pb[GI_RSM_ROWS];
+#pragma unroll
+    for (int r = 0; r < GI_RSM_ROWS; ++r) {
+      pr[r] = er[r];
+      pg[r] = eg[r];
+      pb[r] = eb[r];
+    }
+    if (found && GI_ANY(anyShared))
+      rsm_block_centre_sum(c, R, res, ts, (global const int4*)records, innerSamples, samples, blockOffsets, weights,
+                           dminOverride, er, eg, eb, ortho);
+    if (GI_ANY(anyOwn)) {
+      rsm_pixel_centre_sum(R, res, ts, records, innerSamples, samples, offsets, weights, dminOverride, pr, pg, pb, ortho);
 #pragma unroll
       for (int r = 0; r < GI_RSM_ROWS; ++r) {
-        floatV fx = RSM_FLOOR(rsm_min(rsm_max(sx[r] + o.x, loClamp), hiClamp));
-        floatV fy = RSM_FLOOR(rsm_min(rsm_max(sy[r] + o.y, loClamp), hiClamp));
-        uintV t = convert_uintV(convert_intV(fy) * pitch + convert_intV(fx) + (pitch + 1));
-        intV w0, w1, w2, w3;
-        GI_GATHER_AOS4(int, records, t, w0, w1, w2, w3)
-        floatV d = as_floatV(w0);
-        floatV ux, uy;
-        if (ortho) {
-          ux = cx[r] - ts * fx;
-          uy = cy[r] + ts * fy;
-        } else {
-          ux = cx[r] - d * (ts * fx + lateral);
-          uy = cy[r] + d * (ts * fy + lateral);
-        }
-        floatV uz = d - dr[r];
-        floatV mx = convert_floatV(((w1) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
-        floatV my = convert_floatV(((w2) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
-        floatV mz = convert_floatV(((w3) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
-        floatV d2 = ux * ux + uy * uy + uz * uz;
-        floatV cp = mx * ux + my * uy + mz * uz;
-        floatV cr = nx[r] * ux + ny[r] * uy + nz[r] * uz;
-        floatV dmin2;
-        if (dminOverride > 0.0f) {
-          dmin2 = (floatV)(fixedDmin2);
-        } else if (ortho) {
-          dmin2 = (floatV)(0.25f * ts * ts);
-        } else {
-          dmin2 = (0.25f * ts * ts) * d * d;
-        }
-        floatV g = rsm_max(cp, zero) * rsm_max(cr, zero) * w / (rsm_max(d2, (floatV)(1e-20f)) * rsm_max(d2, dmin2));
-        er[r] += as_floatV(w1) * g;
-        eg[r] += as_floatV(w2) * g;
-        eb[r] += as_floatV(w3) * g;
+        er[r] = GI_SEL(er[r], pr[r], own[r]);
+        eg[r] = GI_SEL(eg[r], pg[r], own[r]);
+        eb[r] = GI_SEL(eb[r], pb[r], own[r]);
       }
     }
+  } else if (GI_ANY(anySurface)) {
+    rsm_pixel_centre_sum(R, res, ts, records, 0, samples, offsets, weights, dminOverride, er, eg, eb, ortho);
   }
 #pragma unroll
   for (int r = 0; r < GI_RSM_ROWS; ++r) {
@@ -247,11 +409,18 @@ inline void rsm_gather_rows(int width, int height, int lowWidth, int lowHeight, 
 #define RSM_GATHER_ARGS                                                                                       \
   int width, int height, int lowWidth, int lowHeight, global const float *gPosition, global const float *gNormal, \
       GiView rsmView, global const int *records, int samples, global const float2 *offsets,                   \
-      global const float *weights, float dminOverride, int accumulate, global float4 *lowIrradiance
-#define RSM_GATHER_CALL(ortho)                                                                                \
+      global const float *weights, global const int2 *blockOffsets, int tolerance, int innerSamples,          \
+      float dminOverride,                                                                                     \
+      int accumulate, global float4 *lowIrradiance
+#define RSM_GATHER_CALL(ortho, block)                                                                         \
   rsm_gather_rows(width, height, lowWidth, lowHeight, gPosition, gNormal, &rsmView, records, samples, offsets, \
-                  weights, dminOverride, accumulate, lowIrradiance, ortho)
+                  weights, blockOffsets, tolerance, innerSamples, dminOverride, accumulate, lowIrradiance, ortho, block)
 
-// Orthographic RSMs (directional lights) and perspective ones (spot and point lights).
-kernel void rsm_gather_ortho(RSM_GATHER_ARGS) { RSM_GATHER_CALL(1); }
-kernel void rsm_gather_perspective(RSM_GATHER_ARGS) { RSM_GATHER_CALL(0); }
+// Orthographic RSMs (directional lights) and perspective ones (spot and point lights); per-pixel
+// sample centres, and (where GI_VW divides the block width) per-block ones.
+kernel void rsm_gather_ortho(RSM_GATHER_ARGS) { RSM_GATHER_CALL(1, 0); }
+kernel void rsm_gather_perspective(RSM_GATHER_ARGS) { RSM_GATHER_CALL(0, 0); }
+#if GI_RSM_BLOCK_W % GI_VW == 0
+kernel void rsm_gather_block_ortho(RSM_GATHER_ARGS) { RSM_GATHER_CALL(1, 1); }
+kernel void rsm_gather_block_perspective(RSM_GATHER_ARGS) { RSM_GATHER_CALL(0, 1); }
+#endif
