@@ -140,6 +140,7 @@ kernel void lpv_inject(global const float4* rsmPosition, global const float4* rs
   if (y >= mergedRes || x0 >= mergedRes) return;
   int runCell[LPV_CASCADES];
   float4 run[LPV_CASCADES][3];
+#pragma unroll
   for (int k = 0; k < LPV_CASCADES; ++k) {
     runCell[k] = -1;
     run[k][0] = run[k][1] = run[k][2] = (float4)(0.0f);
@@ -170,19 +171,22 @@ kernel void lpv_inject(global const float4* rsmPosition, global const float4* rs
         weight += GI_SEL(0.0f, w, lit);
       }
     intV valid = weight > 0.0f && x < mergedRes;
-    px /= weight;
-    py /= weight;
-    pz /= weight;
+    floatV invWeight = 1.0f / weight;  // one division for the 3 means
+    px *= invWeight;
+    py *= invWeight;
+    pz *= invWeight;
     // Normals that cancel: an isotropic emitter with the same flux.
     floatV l2 = nx * nx + ny * ny + nz * nz, inv = GI_SEL(0.0f, rsqrt(l2), l2 > 1e-30f);
     nx *= inv;
     ny *= inv;
     nz *= inv;
     int cell[LPV_CASCADES][GI_VW];
+#pragma unroll
     for (int k = 0; k < LPV_CASCADES; ++k) {
       float4 c = cascades[k];
-      floatV ux = (px + bias * c.w * nx - c.x) / c.w, uy = (py + bias * c.w * ny - c.y) / c.w,
-             uz = (pz + bias * c.w * nz - c.z) / c.w;
+      float invCell = 1.0f / c.w;  // a scalar division per cascade, not 3 vector divisions per chunk
+      floatV ux = fma(nx, bias, (px - c.x) * invCell), uy = fma(ny, bias, (py - c.y) * invCell),
+             uz = fma(nz, bias, (pz - c.z) * invCell);  // (p + bias·s·n − origin)/s
       intV cx = convert_intV(floor(ux)), cy = convert_intV(floor(uy)), cz = convert_intV(floor(uz));
       intV inside = valid && ux >= 0.0f && uy >= 0.0f && uz >= 0.0f && cx < LPV_N && cy < LPV_N && cz < LPV_N;
       vstoreV(GI_SEL((intV)(-1), (cz * LPV_N + cy) * LPV_N + cx, inside), 0, cell[k]);
@@ -196,6 +200,7 @@ kernel void lpv_inject(global const float4* rsmPosition, global const float4* rs
     vstoreV(GI_SH_LOBE1 * nx * GI_INV_PI, 0, lobeX);
     for (int i = 0; i < GI_VW; ++i) {
       float4 lobe = (float4)(GI_SH_LOBE0 * GI_INV_PI, lobeY[i], lobeZ[i], lobeX[i]);  // Φ = 1: I(ω) = lobe/π
+#pragma unroll
       for (int k = 0; k < LPV_CASCADES; ++k) {
         if (cell[k][i] != runCell[k]) {
           if (runCell[k] >= 0)
@@ -232,6 +237,7 @@ inline void add_surfels(const GiView* view, global const float4* position, globa
                         global long* geometryAcc) {
   int runNode[LPV_CASCADES];
   float4 run[LPV_CASCADES];
+#pragma unroll
   for (int k = 0; k < LPV_CASCADES; ++k) {
     runNode[k] = -1;
     run[k] = (float4)(0.0f);
@@ -250,29 +256,33 @@ inline void add_surfels(const GiView* view, global const float4* position, globa
     if (!view->orthographic) {
       floatV dx = px - eye.x, dy = py - eye.y, dz = pz - eye.z;
       floatV dist = sqrt(dx * dx + dy * dy + dz * dz);
-      dirx = dx / dist;
-      diry = dy / dist;
-      dirz = dz / dist;
+      floatV invDist = 1.0f / dist;  // one division for the direction and the area
+      dirx = dx * invDist;
+      diry = dy * invDist;
+      dirz = dz * invDist;
       floatV along = dx * axis.x + dy * axis.y + dz * axis.z;
-      area = texelArea * along * along * (along / dist);  // texel solid angle s²·cos³α times dist²
+      area = texelArea * along * along * (along * invDist);  // texel solid angle s²·cos³α times dist²
     }
     area = area / fmax(fabs(nx * dirx + ny * diry + nz * dirz), 0.1f);
     int node[LPV_CASCADES][GI_VW];
     float weight[LPV_CASCADES][GI_VW], lobeY[GI_VW], lobeZ[GI_VW], lobeX[GI_VW];
+#pragma unroll
     for (int k = 0; k < LPV_CASCADES; ++k) {
       float4 c = cascades[k];
-      floatV ux = (px - c.x) / c.w, uy = (py - c.y) / c.w, uz = (pz - c.z) / c.w;
+      float invCell = 1.0f / c.w;  // a scalar division per cascade, not 4 vector divisions per chunk
+      floatV ux = (px - c.x) * invCell, uy = (py - c.y) * invCell, uz = (pz - c.z) * invCell;
       intV cx = convert_intV(rint(ux)), cy = convert_intV(rint(uy)), cz = convert_intV(rint(uz));  // nearest node
       intV inside = valid && ux > -0.5f && uy > -0.5f && uz > -0.5f && cx >= 0 && cy >= 0 && cz >= 0 &&
                     cx <= LPV_N && cy <= LPV_N && cz <= LPV_N;
       vstoreV(GI_SEL((intV)(-1), (cz * LPV_M + cy) * LPV_M + cx, inside), 0, node[k]);
-      vstoreV(area / (c.w * c.w), 0, weight[k]);
+      vstoreV(area * (invCell * invCell), 0, weight[k]);
     }
     vstoreV(GI_SH_LOBE1 * ny, 0, lobeY);
     vstoreV(GI_SH_LOBE1 * nz, 0, lobeZ);
     vstoreV(GI_SH_LOBE1 * nx, 0, lobeX);
     for (int i = 0; i < GI_VW; ++i) {
       float4 lobe = (float4)(GI_SH_LOBE0, lobeY[i], lobeZ[i], lobeX[i]);
+#pragma unroll
       for (int k = 0; k < LPV_CASCADES; ++k) {
         if (node[k][i] != runNode[k]) {
           if (runNode[k] >= 0)
