@@ -139,18 +139,24 @@ typedef struct {
   int twoSided;  // |mean normal| < 0.5: normals cancel (both sides of thin geometry)
 } VoxelSurface;
 
+// The signed sum of a biased field (voxel_types.h) of record a.
+inline int vox_signed_sum(global const uint* a, int field) {
+  return (int)(a[field] - (a[GI_VOX_OPACITY] >> 16) * GI_VOX_SIGNED_BIAS);  // GI_VOX_UNIT = 2^16
+}
+
 inline VoxelSurface vox_resolve(GiVoxelGrid grid, global const uint* acc, size_t v) {
   int N = grid.resolution;
   global const uint* a = acc + v * GI_VOX_RECORD;
-  global const int* ia = (global const int*)a;
   VoxelSurface r;
   float weight = (float)a[GI_VOX_OPACITY] * (1.0f / GI_VOX_UNIT);  // Σ opacity
   r.alpha = weight / (float)a[GI_VOX_COUNT];
   float invW = 1.0f / weight;
   r.albedo = (float3)(a[GI_VOX_ALBEDO], a[GI_VOX_ALBEDO + 1], a[GI_VOX_ALBEDO + 2]) * (invW / GI_VOX_UNIT);
   r.emission = (float3)(a[GI_VOX_EMISSION], a[GI_VOX_EMISSION + 1], a[GI_VOX_EMISSION + 2]) * (invW / GI_VOX_EMISSION_UNIT);
-  float3 meanN = (float3)(ia[GI_VOX_NORMAL], ia[GI_VOX_NORMAL + 1], ia[GI_VOX_NORMAL + 2]) * (invW * 4.0f / GI_VOX_UNIT);
-  float3 offset = (float3)(ia[GI_VOX_OFFSET], ia[GI_VOX_OFFSET + 1], ia[GI_VOX_OFFSET + 2]) * (invW * 4.0f / GI_VOX_UNIT);
+  float3 meanN = (float3)(vox_signed_sum(a, GI_VOX_NORMAL), vox_signed_sum(a, GI_VOX_NORMAL + 1),
+                          vox_signed_sum(a, GI_VOX_NORMAL + 2)) * (invW * 4.0f / GI_VOX_UNIT);
+  float3 offset = (float3)(vox_signed_sum(a, GI_VOX_OFFSET), vox_signed_sum(a, GI_VOX_OFFSET + 1),
+                           vox_signed_sum(a, GI_VOX_OFFSET + 2)) * (invW * 4.0f / GI_VOX_UNIT);
   r.position = vload3(0, grid.origin) + (convert_float3(vox_cell(v, N)) + 0.5f + offset) * grid.voxel_size;
   r.twoSided = length(meanN) < 0.5f;
   r.normal = safe_normalize(meanN, (float3)(0.0f, 1.0f, 0.0f));

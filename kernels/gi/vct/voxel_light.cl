@@ -94,7 +94,14 @@ inline void vox_inject_block(GiVoxelGrid grid, global const uint* acc, global co
   GI_GATHER_SPAN4(int, words, word + 4, emG, emB, nX, nY)
   GI_GATHER_SPAN4(int, words, word + 8, nZ, oX, oY, oZ)
   GI_GATHER_SPAN4(int, words, word + 12, opacity, triangles, pad0, pad1)
-  // vox_resolve lane-wise.
+  // vox_resolve lane-wise (vox_signed_sum: the biased signed fields less their bias).
+  intV bias = convert_intV(as_uintV(opacity) >> 16) * (int)GI_VOX_SIGNED_BIAS;
+  nX -= bias;
+  nY -= bias;
+  nZ -= bias;
+  oX -= bias;
+  oY -= bias;
+  oZ -= bias;
   intV covered = opacity != 0;
   floatV weight = convert_floatV(as_uintV(opacity)) * (1.0f / GI_VOX_UNIT);
   floatV alpha = weight / convert_floatV(max(as_uintV(triangles), 1u));

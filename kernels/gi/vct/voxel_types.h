@@ -31,13 +31,20 @@ typedef struct {
 // Accumulator fields (voxel v's field f at acc[v · GI_VOX_RECORD + f]).
 #define GI_VOX_ALBEDO 0    // 3 fields, uint, ρ·opacity · GI_VOX_UNIT
 #define GI_VOX_EMISSION 3  // 3 fields, uint, L_e·opacity · GI_VOX_EMISSION_UNIT
-#define GI_VOX_NORMAL 6    // 3 fields, int, n·opacity · GI_VOX_UNIT / 4
-#define GI_VOX_OFFSET 9    // 3 fields, int, (nearest point − centre)/voxel_size · opacity · GI_VOX_UNIT / 4
+#define GI_VOX_NORMAL 6    // 3 fields, biased, n·opacity · GI_VOX_UNIT / 4
+#define GI_VOX_OFFSET 9    // 3 fields, biased, (nearest point − centre)/voxel_size · opacity · GI_VOX_UNIT / 4
 #define GI_VOX_OPACITY 12  // uint, opacity · GI_VOX_UNIT
 #define GI_VOX_COUNT 13    // uint, triangles touching the voxel
 #define GI_VOX_FIELDS 14
 #define GI_VOX_RECORD 16   // words per voxel: the fields padded to 64 bytes (one cache line; vct_clear_occupied
                            // zeroes it as one uint16)
+
+// The signed fields (normal, offset; each pair's value in [-1, 1] · GI_VOX_UNIT / 4) are stored
+// biased: every pair that adds to them (every pair not cut away, i.e. opacity / GI_VOX_UNIT of
+// them) adds value + GI_VOX_SIGNED_BIAS >= 0, so that the voxelization can add two of them with
+// one 64-bit atomic without a borrow between the words. The signed sum is
+// field − (opacity / GI_VOX_UNIT) · GI_VOX_SIGNED_BIAS (vox_signed_sum in voxel_grid.h), exact.
+#define GI_VOX_SIGNED_BIAS 16384u
 
 // Fixed-point units: values in [0, 1] get 16 fractional bits, so 65535 contributions fit in 32 bits
 // (signed quantities in [-2, 2] one bit fewer). Emission (W/(m²·sr)) gets 8 fractional bits and

@@ -85,7 +85,8 @@ inline float2 nearest_on_triangle(float3 p, float3 a, float3 b, float3 c) {
 }
 
 inline uint vox_fixed(float v, float unit) { return (uint)(v * unit + 0.5f); }
-inline int vox_fixed_signed(float v, float unit) { return (int)rint(v * unit); }
+// A signed value in [-1, 1] in fixed point plus GI_VOX_SIGNED_BIAS (voxel_types.h).
+inline uint vox_fixed_biased(float v, float unit) { return (uint)((int)rint(v * unit)) + GI_VOX_SIGNED_BIAS; }
 
 // Zeroes the accumulators, level 0 of the radiance chain and the occupancy bits at the voxels the
 // previous voxelization listed (`occupied`, `occupiedCount` entries): every other voxel is still
@@ -232,7 +233,6 @@ kernel void vct_voxelize_trianglewise(GiVoxelGrid grid, global const float4* pos
         sn = snLength2 > 1e-30f ? sn * rsqrt(snLength2) : planeN * rsqrt(vox_dot(planeN, planeN));
         float3 em = emits ? fmin(sm.emission, GI_VOX_EMISSION_MAX) : (float3)(0.0f);
         float3 off = clamp(p - c, -1.0f, 1.0f);
-        global int* irecord = (global int*)record;
         atomic_add(record + GI_VOX_ALBEDO + 0, vox_fixed(clamp(sm.diffuse.x, 0.0f, 1.0f), GI_VOX_UNIT));
         atomic_add(record + GI_VOX_ALBEDO + 1, vox_fixed(clamp(sm.diffuse.y, 0.0f, 1.0f), GI_VOX_UNIT));
         atomic_add(record + GI_VOX_ALBEDO + 2, vox_fixed(clamp(sm.diffuse.z, 0.0f, 1.0f), GI_VOX_UNIT));
@@ -241,12 +241,12 @@ kernel void vct_voxelize_trianglewise(GiVoxelGrid grid, global const float4* pos
           atomic_add(record + GI_VOX_EMISSION + 1, vox_fixed(em.y, GI_VOX_EMISSION_UNIT));
           atomic_add(record + GI_VOX_EMISSION + 2, vox_fixed(em.z, GI_VOX_EMISSION_UNIT));
         }
-        atomic_add(irecord + GI_VOX_NORMAL + 0, vox_fixed_signed(sn.x, 0.25f * GI_VOX_UNIT));
-        atomic_add(irecord + GI_VOX_NORMAL + 1, vox_fixed_signed(sn.y, 0.25f * GI_VOX_UNIT));
-        atomic_add(irecord + GI_VOX_NORMAL + 2, vox_fixed_signed(sn.z, 0.25f * GI_VOX_UNIT));
-        atomic_add(irecord + GI_VOX_OFFSET + 0, vox_fixed_signed(off.x, 0.25f * GI_VOX_UNIT));
-        atomic_add(irecord + GI_VOX_OFFSET + 1, vox_fixed_signed(off.y, 0.25f * GI_VOX_UNIT));
-        atomic_add(irecord + GI_VOX_OFFSET + 2, vox_fixed_signed(off.z, 0.25f * GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_NORMAL + 0, vox_fixed_biased(sn.x, 0.25f * GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_NORMAL + 1, vox_fixed_biased(sn.y, 0.25f * GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_NORMAL + 2, vox_fixed_biased(sn.z, 0.25f * GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_OFFSET + 0, vox_fixed_biased(off.x, 0.25f * GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_OFFSET + 1, vox_fixed_biased(off.y, 0.25f * GI_VOX_UNIT));
+        atomic_add(record + GI_VOX_OFFSET + 2, vox_fixed_biased(off.z, 0.25f * GI_VOX_UNIT));
         atomic_add(record + GI_VOX_OPACITY, vox_fixed(opacity, GI_VOX_UNIT));
       }
     }
@@ -448,9 +448,10 @@ inline GiVoxFloat4V vox_sample_levelV(global const uchar4* texels, GiTexLevelV t
 // Adds one triangle–voxel pair (lane l of `fields`: the fixed-point values of voxel_types.h's
 // fields 0 … 11) to voxel v's record, as vct_voxelize_trianglewise does with one 32-bit atomic per
 // field. Same sums, fewer atomics: additions of 0 are skipped (most pairs emit nothing), and with
-// 64-bit atomics the unsigned fields go in pairs of adjacent words (albedo R+G, albedo B +
-// emission R, emission G+B, opacity + count: the low word's sum never carries into the high one,
-// as no field's sum exceeds 32 bits (voxel_types.h's fixed-point ranges)).
+// 64-bit atomics the fields go in pairs of adjacent words (albedo R+G, albedo B + emission R,
+// emission G+B, normal x+y, normal z + offset x, offset y+z, opacity + count: every addend is
+// non-negative (the signed fields biased, voxel_types.h) and no field's sum exceeds 32 bits, so
+// the low word never carries into the high one).
 #ifdef cl_khr_int64_base_atomics
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #define GI_VOX_PAIR(lo, hi) ((ulong)(lo) | (ulong)(hi) << 32)
@@ -482,8 +483,11 @@ inline void vox_accumulate(global uint* acc, global uint* occupancy, size_t v, i
   for (int f = 0; f < 6; ++f)
     if (unsignedFields[f] != 0u) atomic_add(record + GI_VOX_ALBEDO + f, unsignedFields[f]);
 #endif
-  for (int f = GI_VOX_NORMAL; f < GI_VOX_OFFSET + 3; ++f)
-    if (fields[f][l] != 0u) atomic_add(record + f, fields[f][l]);
+#ifdef cl_khr_int64_base_atomics
+  for (int f = GI_VOX_NORMAL; f < GI_VOX_OFFSET + 3; f += 2) atom_add(pairs + f / 2, GI_VOX_PAIR(fields[f][l], fields[f + 1][l]));
+#else
+  for (int f = GI_VOX_NORMAL; f < GI_VOX_OFFSET + 3; ++f) atomic_add(record + f, fields[f][l]);
+#endif
 }
 
 // The column walk of the trianglewise kernel for columns `first` … first + GI_VW − 1 of the list.
@@ -603,15 +607,6 @@ inline void vox_columns(GiVoxelGrid grid, uint first, uint total, global const f
     intV hit = (s < steps) & tri_box_overlapV(subV(v0, c), subV(v1, c), subV(v2, c), h);
     if (!GI_ANY(hit)) continue;
     intV voxel = (z * N + y) * N + x;
-#if GI_VW > 1
-    {
-      int vl[GI_VW], hl[GI_VW];
-      vstoreV(voxel, 0, vl);
-      vstoreV(hit, 0, hl);
-      for (int l = 0; l < GI_VW; ++l)
-        if (hl[l]) __builtin_prefetch(acc + (size_t)vl[l] * GI_VOX_RECORD, 1, 3);
-    }
-#endif
     floatV bu, bv;
     nearest_on_triangleV(c, v0, v1, v2, &bu, &bv);
     floatV w0 = 1.0f - bu - bv;
@@ -642,11 +637,11 @@ inline void vox_columns(GiVoxelGrid grid, uint first, uint total, global const f
     float3V sn = safe_normalizeV(f3v(w0 * n0.x + bu * n1.x + bv * n2.x, w0 * n0.y + bu * n1.y + bv * n2.y,
                                      w0 * n0.z + bu * n1.z + bv * n2.z), faceUnit);
     float3V off = f3v(clamp(p.x - c.x, -1.0f, 1.0f), clamp(p.y - c.y, -1.0f, 1.0f), clamp(p.z - c.z, -1.0f, 1.0f));
-    // Fixed-point values (vox_fixed, vox_fixed_signed) of the lanes.
+    // Fixed-point values (vox_fixed, vox_fixed_biased) of the lanes.
     uint fields[GI_VOX_FIELDS - 2][GI_VW];
 #define GI_VOX_U(f, val) vstoreV(convert_uintV((val) * GI_VOX_UNIT + 0.5f), 0, fields[f]);
 #define GI_VOX_E(f, val) vstoreV(convert_uintV((val) * GI_VOX_EMISSION_UNIT + 0.5f), 0, fields[f]);
-#define GI_VOX_S(f, val) vstoreV(as_uintV(convert_intV(rint((val) * (0.25f * GI_VOX_UNIT)))), 0, fields[f]);
+#define GI_VOX_S(f, val) vstoreV(as_uintV(convert_intV(rint((val) * (0.25f * GI_VOX_UNIT)))) + GI_VOX_SIGNED_BIAS, 0, fields[f]);
     GI_VOX_U(GI_VOX_ALBEDO + 0, clamp(cr * (1.0f - metallic), 0.0f, 1.0f))
     GI_VOX_U(GI_VOX_ALBEDO + 1, clamp(cg * (1.0f - metallic), 0.0f, 1.0f))
     GI_VOX_U(GI_VOX_ALBEDO + 2, clamp(cb * (1.0f - metallic), 0.0f, 1.0f))
