@@ -7,6 +7,10 @@
 #include <fstream>
 #include <sstream>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 #include "cl/gather_width.h"
 #include "cl/kernel_sources.h"
 #include "util/file_io.h"
@@ -149,11 +153,48 @@ DeviceInfo selectDevice(const std::string& selectorIn) {
 }
 
 // ---------------------------------------------------------------------------------------------
+namespace {
+
+// On a CPU device a kernel walking a large grid or record array touches a new 4 KiB page every
+// few accesses, and with transparent huge pages in `madvise` mode (the Debian default) the
+// driver's own allocations never get 2 MiB pages: the page walks showed up as a third of the
+// voxel light injection's time (docs/PERFORMANCE.md). Buffers of at least this size are
+// therefore allocated here, 2 MiB aligned and advised as huge pages, and handed to the driver
+// with CL_MEM_USE_HOST_PTR (which a CPU driver uses in place).
+constexpr size_t kHugePage = size_t(2) << 20;
+
+#if defined(__linux__)
+void* allocateHugePageMemory(size_t bytes) {
+  void* p = nullptr;
+  if (posix_memalign(&p, kHugePage, (bytes + kHugePage - 1) / kHugePage * kHugePage) != 0) return nullptr;
+  madvise(p, bytes, MADV_HUGEPAGE);  // advice only: on failure the memory keeps 4 KiB pages
+  return p;
+}
+void CL_CALLBACK freeHugePageMemory(cl_mem, void* p) { std::free(p); }
+#endif
+
+}  // namespace
+
 Buffer::Buffer(Context& ctx, size_t bytes, cl_mem_flags flags, const std::string& what) : bytes_(bytes) {
   ctx.requireAllocation(bytes, what);
+  const std::string failure = "allocating " + what + " (" + std::to_string(bytes) + " bytes)";
   cl_int err = CL_SUCCESS;
+#if defined(__linux__)
+  if (ctx.hugePageBuffers() && bytes >= kHugePage) {
+    void* host = allocateHugePageMemory(bytes);
+    if (!host) throw Error(failure + ": out of host memory");
+    mem_ = clCreateBuffer(ctx.get(), flags | CL_MEM_USE_HOST_PTR, bytes, host, &err);
+    if (err == CL_SUCCESS) err = clSetMemObjectDestructorCallback(mem_, freeHugePageMemory, host);
+    if (err != CL_SUCCESS) {
+      if (mem_) clReleaseMemObject(std::exchange(mem_, nullptr));
+      std::free(host);
+    }
+    check(err, failure);
+    return;
+  }
+#endif
   mem_ = clCreateBuffer(ctx.get(), flags, std::max<size_t>(bytes, 1), nullptr, &err);
-  check(err, "allocating " + what + " (" + std::to_string(bytes) + " bytes)");
+  check(err, failure);
 }
 Buffer::~Buffer() { if (mem_) clReleaseMemObject(mem_); }
 Buffer& Buffer::operator=(Buffer&& o) noexcept {
@@ -239,6 +280,14 @@ Context::Context(const DeviceInfo& device) : device_(device) {
     std::string v = vw;
     if (v != "1" && v != "8" && v != "16") throw Error("GI_VECTOR_WIDTH='" + v + "': expected 1, 8 or 16");
     vectorWidth_ = std::stoi(v);
+  }
+#if defined(__linux__)
+  hugePageBuffers_ = device_.isCpu;
+#endif
+  if (const char* hp = std::getenv("GI_HUGE_PAGES"); hp && *hp) {
+    std::string v = hp;
+    if (v != "0" && v != "1") throw Error("GI_HUGE_PAGES='" + v + "': expected 0 or 1");
+    hugePageBuffers_ = hugePageBuffers_ && v == "1";
   }
   cl_int err = CL_SUCCESS;
   cl_context_properties props[] = {CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(device.platform), 0};

@@ -204,6 +204,10 @@ public:
   // Throws gi::Error naming `what` when `bytes` exceed what one allocation or the device can hold.
   void requireAllocation(uint64_t bytes, const std::string& what) const;
 
+  // Whether large buffers live in host memory backed by 2 MiB pages (Linux, CPU devices; see
+  // Buffer::Buffer). $GI_HUGE_PAGES=0 turns it off, e.g. to measure what it gives.
+  bool hugePageBuffers() const { return hugePageBuffers_; }
+
   // Where compiled program binaries are kept: $GI_CACHE_DIR, else $XDG_CACHE_HOME/gi-engine,
   // else ~/.cache/gi-engine. Empty string disables the cache (GI_CACHE_DIR=off).
   static std::string cacheDirectory();
@@ -211,6 +215,7 @@ public:
 private:
   DeviceInfo device_;
   int vectorWidth_ = 1;
+  bool hugePageBuffers_ = false;
   cl_context ctx_ = nullptr;
   cl_command_queue queue_ = nullptr;
   Profiler profiler_;
