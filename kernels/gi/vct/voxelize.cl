@@ -91,16 +91,21 @@ inline uint vox_fixed_biased(float v, float unit) { return (uint)((int)rint(v * 
 // Zeroes the accumulators, level 0 of the radiance chain and the occupancy bits at the voxels the
 // previous voxelization listed (`occupied`, `occupiedCount` entries): every other voxel is still
 // zero from the buffers' initial fill, so the grid is clear without writing all of it (128³:
-// 134 MB of accumulators). One work-item per listed voxel; launched over N³ items, as the count is
-// on the device. Voxels of one occupancy word may clear it from several work-items: all store 0.
+// 134 MB of accumulators). GI_VOX_CLEAR_ENTRIES list entries per work-item; launched over
+// N³ / GI_VOX_CLEAR_ENTRIES items, as the count is on the device (one item per entry made most of
+// the 2M items of 128³ exit at once). Voxels of one occupancy word may clear it from several
+// work-items: all store 0.
+#define GI_VOX_CLEAR_ENTRIES 32
 kernel void vct_clear_occupied(global const uint* occupied, global const uint* occupiedCount, global uint* acc,
                                global float4* level0, global uint* occupancy) {
-  size_t i = get_global_id(0);
-  if (i >= occupiedCount[0]) return;
-  size_t v = occupied[i];
-  ((global uint16*)acc)[v] = (uint16)(0u);  // the voxel's whole record (GI_VOX_RECORD = 16)
-  level0[v] = (float4)(0.0f);
-  occupancy[v >> 5] = 0u;
+  uint count = occupiedCount[0];
+  size_t first = get_global_id(0) * GI_VOX_CLEAR_ENTRIES;
+  for (size_t i = first; i < min(first + GI_VOX_CLEAR_ENTRIES, (size_t)count); ++i) {
+    size_t v = occupied[i];
+    ((global uint16*)acc)[v] = (uint16)(0u);  // the voxel's whole record (GI_VOX_RECORD = 16)
+    level0[v] = (float4)(0.0f);
+    occupancy[v >> 5] = 0u;
+  }
 }
 
 // The occupied list from the occupancy bits (bit v & 31 of word v >> 5 set by vct_voxelize), in

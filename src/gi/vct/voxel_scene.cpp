@@ -98,7 +98,7 @@ uint32_t VoxelScene::occupancySpans() const { return uint32_t(voxelCount() / kOc
 void VoxelScene::voxelize(const DeviceScene& scene, VoxelizeKernel kernel) {
   uint32_t n = uint32_t(voxelCount()), spans = occupancySpans();
   clear_.args(occupied_, occupiedCount_, acc_, iso_, occupancy_);
-  ctx_.launch(clear_, cl::NDRange::d1(cl::roundUp(n, 256), 256), "vct: clear");
+  ctx_.launch(clear_, cl::NDRange::d1(cl::roundUp(n / kClearEntriesPerItem, 64), 64), "vct: clear");
   uint32_t triangles = scene.triangleCount;
   if (triangles > 0 && kernel == VoxelizeKernel::Trianglewise) {
     voxelizeTrianglewise_.args(grid_, scene.positions, scene.normals, scene.uvs, scene.triangles,

@@ -90,6 +90,7 @@ private:
   // Work-items of vct_voxelize (each loops over every kVoxelizeWorkItems-th group of columns):
   // enough work-groups of 64 for every core.
   static constexpr uint32_t kVoxelizeWorkItems = 8192;
+  static constexpr uint32_t kClearEntriesPerItem = 32;  // GI_VOX_CLEAR_ENTRIES (voxelize.cl)
   cl::Buffer instanceEmits_, acc_, occupied_, occupiedCount_, occupancy_, spanCounts_, iso_, aniso_, sh_, shAniso_;
 
   // The 6 directional volumes of levels ≥ 1, float4 each, and the chain's zero end record.
