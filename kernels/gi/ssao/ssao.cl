@@ -25,6 +25,14 @@
 #include "common/shared_types.h"
 #include "common/vector_width.h"
 
+// Adds 1 to the integer lanes of `count` where `mask` holds: a vector comparison's true is −1 (one
+// subtraction), a scalar one's is 1.
+#if GI_VW == 1
+#define SSAO_COUNT(count, mask) (count) += (mask)
+#else
+#define SSAO_COUNT(count, mask) (count) -= (mask)
+#endif
+
 #ifndef GI_SSAO_SAMPLES
 #define GI_SSAO_SAMPLES 16
 #endif
@@ -323,7 +331,8 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
   float tmp[4 * GI_VW];
   floatV z = ssao_load1(depth, i0, valid);
   floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
-  floatV tol = tau * z, occ = zero, count = zero, Ex = zero, Ey = zero, Ez = zero;
+  floatV tol = tau * z, occ = zero, Ex = zero, Ey = zero, Ez = zero;
+  intV count = (intV)(0);  // taps taken
   intV lanes = (intV)(GI_LANES);
   global const float* irr = (global const float*)irradianceIn;
 #pragma unroll
@@ -356,7 +365,7 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
       }
       intV take = inside & (fabs(zq - z) <= tol);
       occ += GI_SEL(zero, oq, take);
-      count += GI_SEL(zero, one, take);
+      SSAO_COUNT(count, take);
       if (bleeding) {
         Ex += GI_SEL(zero, ex, take);
         Ey += GI_SEL(zero, ey, take);
@@ -367,7 +376,7 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
   // count >= 1 on surfaces (the centre always passes); background lanes (infinite depth) take
   // nothing and keep the upstream value.
   intV surface = isfinite(z);
-  floatV inv = GI_SEL(zero, one / fmax(count, one), surface);
+  floatV inv = GI_SEL(zero, one / fmax(convert_floatV(count), one), surface);
   ssao_compose(i0, valid, occ * inv, GI_SEL(zero, GI_INV_PI * inv, surface), Ex, Ey, Ez, upstream, bleeding, albedo,
                occlusionOut, indirect);
 }
@@ -410,7 +419,7 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
     floatV e_ = (z) * (P + Q * (offsetX)) - 1.0f;                        \
     intV take_ = fabs(e_) <= tau;                                        \
     occ += GI_SEL(zero, oq, take_);                                      \
-    count += GI_SEL(zero, one, take_);                                   \
+    SSAO_COUNT(count, take_);                                            \
     if (bleeding) {                                                      \
       Ex += GI_SEL(zero, ex, take_);                                     \
       Ey += GI_SEL(zero, ey, take_);                                     \
@@ -438,8 +447,9 @@ kernel void ssao_upsample_blur_compose(int width, int height, int gridWidth, int
     zO = GI_GATHER(floatV, depth + row0, min(x0 + 2 * lanes + 1, width - 1));
   }
   floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
-  floatV occE = zero, cntE = zero, ExE = zero, EyE = zero, EzE = zero;
-  floatV occO = zero, cntO = zero, ExO = zero, EyO = zero, EzO = zero;
+  floatV occE = zero, ExE = zero, EyE = zero, EzE = zero;
+  floatV occO = zero, ExO = zero, EyO = zero, EzO = zero;
+  intV cntE = (intV)(0), cntO = (intV)(0);  // taps taken
   global const float* irr = (global const float*)irradianceIn;
   int c0 = x0 / 2 - 2, v0 = (y + 1) / 2 - 2;
   bool interior = c0 >= 0 && c0 + 4 + GI_VW <= gridWidth;
@@ -480,8 +490,9 @@ kernel void ssao_upsample_blur_compose(int width, int height, int gridWidth, int
     }
   }
   // No grid pixel accepted (or the background): no occlusion, no bleeding, the upstream value kept.
-  intV surfE = isfinite(zE) & (cntE > 0.0f), surfO = isfinite(zO) & (cntO > 0.0f);
-  floatV invE = GI_SEL(zero, one / fmax(cntE, one), surfE), invO = GI_SEL(zero, one / fmax(cntO, one), surfO);
+  intV surfE = isfinite(zE) & (cntE > 0), surfO = isfinite(zO) & (cntO > 0);
+  floatV invE = GI_SEL(zero, one / fmax(convert_floatV(cntE), one), surfE);
+  floatV invO = GI_SEL(zero, one / fmax(convert_floatV(cntO), one), surfO);
   occE *= invE;
   occO *= invO;
   floatV kE = GI_INV_PI * invE, kO = GI_INV_PI * invO;
