@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <queue>
 #include <random>
 
@@ -332,22 +333,30 @@ std::vector<glm::vec4> randomShLevel0(const std::vector<glm::vec4>& level0, uint
   return sh;
 }
 
+// `count` random triangles around centres in [-1, 1]³: every `largeEvery`-th of size `large`,
+// the others `small`; every `planeEvery`-th flat in axis `planeAxis` (axis-aligned plane), every
+// 7th a sliver; triangle i gets material(i).
+void addMixedTriangles(Scene& s, std::mt19937& rng, int count, int largeEvery, float large, float small,
+                       int planeEvery, int planeAxis, const std::function<uint32_t(int)>& material) {
+  std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+  for (int i = 0; i < count; ++i) {
+    glm::vec3 c(U(rng), U(rng), U(rng));
+    float size = i % largeEvery == 0 ? large : small;
+    glm::vec3 a = c + size * glm::vec3(U(rng), U(rng), U(rng)), b = c + size * glm::vec3(U(rng), U(rng), U(rng));
+    glm::vec3 d = c + size * glm::vec3(U(rng), U(rng), U(rng));
+    if (i % planeEvery == 0) a[planeAxis] = b[planeAxis] = d[planeAxis] = c[planeAxis];
+    if (i % 7 == 0) d = a + 1e-3f * (b - a);
+    test::addTriangle(s, a, b, d, material(i));
+  }
+}
+
 }  // namespace
 
 TEST(VctVoxelize, ConservativeAgainstSamplingOracleAndExactOverlap) {
   // 3000 random triangles of mixed sizes (slivers included) plus 300 axis-aligned ones, 32³.
   Scene s = test::triangleSoup(2500, 0.12f, 7);
   std::mt19937 rng(11);
-  std::uniform_real_distribution<float> U(-1.0f, 1.0f);
-  for (int i = 0; i < 500; ++i) {
-    glm::vec3 c(U(rng), U(rng), U(rng));
-    float size = i % 5 == 0 ? 0.8f : 0.25f;
-    glm::vec3 a = c + size * glm::vec3(U(rng), U(rng), U(rng)), b = c + size * glm::vec3(U(rng), U(rng), U(rng));
-    glm::vec3 d = c + size * glm::vec3(U(rng), U(rng), U(rng));
-    if (i % 2 == 0) a.z = b.z = d.z = c.z;       // axis-aligned plane
-    if (i % 7 == 0) d = a + 1e-3f * (b - a);      // sliver
-    test::addTriangle(s, a, b, d, 0);
-  }
+  addMixedTriangles(s, rng, 500, 5, 0.8f, 0.25f, 2, 2, [](int) { return 0u; });
   s.computeBounds();
   VoxelScene vs(test::context(), s, 32);
   std::vector<uint32_t> device = voxelCounts(vs, s);
@@ -407,15 +416,7 @@ TEST(VctVoxelize, LanesMatchOneTriangleAtATime) {
   Scene s = test::triangleSoup(1200, 0.1f, 5, 9);
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> U(-1.0f, 1.0f);
-  for (int i = 0; i < 300; ++i) {
-    glm::vec3 c(U(rng), U(rng), U(rng));
-    float size = i % 3 == 0 ? 0.8f : 0.3f;
-    glm::vec3 a = c + size * glm::vec3(U(rng), U(rng), U(rng)), b = c + size * glm::vec3(U(rng), U(rng), U(rng));
-    glm::vec3 d = c + size * glm::vec3(U(rng), U(rng), U(rng));
-    if (i % 4 == 0) a.y = b.y = d.y = c.y;   // axis-aligned plane
-    if (i % 7 == 0) d = a + 1e-3f * (b - a);  // sliver
-    test::addTriangle(s, a, b, d, 2 + uint32_t(i % 2));
-  }
+  addMixedTriangles(s, rng, 300, 3, 0.8f, 0.3f, 4, 1, [](int i) { return 2u + uint32_t(i % 2); });
   for (size_t v = 0; v < s.positions.size(); ++v) {
     s.uvs[v] = glm::vec2(1.5f + 2.5f * U(rng), 0.5f + 2.0f * U(rng));
     s.normals[v] = glm::normalize(s.normals[v] + 0.3f * glm::vec3(U(rng), U(rng), U(rng)));
