@@ -204,7 +204,7 @@ TEST(ShIgiFilter, MatchesHostMirrorAndNeverMixesAcrossDiscontinuities) {
        pos = ctx.download<glm::vec4>(g.position);
   auto inst = ctx.download<uint32_t>(g.instance);
   cl::Program prog = ctx.buildProgram("kernels/gi/sh_igi/sh_igi.cl", {{"GI_FX", "4"}, {"GI_FY", "4"},
-                                      {"GI_VW", std::to_string(shIgiVectorWidth(ctx))}});
+                                      {"GI_VW", std::to_string(shIgiFilterVectorWidth(ctx))}});
   cl::Kernel filter = prog.kernel("sh_igi_filter_shade"), filterSeparable = prog.kernel("sh_igi_filter_shade_separable");
   const size_t N = size_t(W) * H;
   cl::Buffer out(ctx, N * 16);

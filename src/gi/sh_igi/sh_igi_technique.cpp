@@ -76,7 +76,7 @@ public:
 
 private:
   struct Programs {
-    cl::Program program, visibleProgram;
+    cl::Program program, visibleProgram, filterProgram;
     cl::Kernel vplLanes, project, projectVisible, filter, filterSeparable;
   };
   // One program per filter window (compile-time GI_FX, GI_FY); the visibility variant of the
@@ -90,8 +90,11 @@ private:
                                      {{"GI_FX", std::to_string(fx)}, {"GI_FY", std::to_string(fy)}, {"GI_VW", std::to_string(shIgiVectorWidth(f.ctx))}});
       p.project = p.program.kernel("sh_igi_project");
       p.vplLanes = p.program.kernel("sh_igi_vpl_lanes");
-      p.filter = p.program.kernel("sh_igi_filter_shade");
-      p.filterSeparable = p.program.kernel("sh_igi_filter_shade_separable");
+      p.filterProgram = f.ctx.buildProgram("kernels/gi/sh_igi/sh_igi.cl",
+                                           {{"GI_FX", std::to_string(fx)}, {"GI_FY", std::to_string(fy)},
+                                            {"GI_VW", std::to_string(shIgiFilterVectorWidth(f.ctx))}});
+      p.filter = p.filterProgram.kernel("sh_igi_filter_shade");
+      p.filterSeparable = p.filterProgram.kernel("sh_igi_filter_shade_separable");
       it = programs_.emplace(key, std::move(p)).first;
     }
     Programs& p = it->second;
@@ -119,6 +122,11 @@ private:
 // time and the filter the same (perf samples, same load).
 int shIgiVectorWidth(const cl::Context& ctx) { return ctx.vectorWidth(); }
 
+// The filters with 8 lanes on a 16-lane CPU device: the separable filter's CPU time fell to 0.6×
+// (its private row pass, 11 rows × 27 planes, is half the size), the box filter's stayed the same;
+// the projection with 8 lanes took 2.2× its time (docs/PERFORMANCE.md, sh-igi, "Sixth round").
+int shIgiFilterVectorWidth(const cl::Context& ctx) { return std::min(8, ctx.vectorWidth()); }
+
 cl::NDRange shIgiRange(const cl::Context& ctx, const ShIgiPlanes& l) {
   const size_t columns = size_t(l.width + shIgiVectorWidth(ctx) - 1) / size_t(shIgiVectorWidth(ctx));
   return cl::NDRange::d1(cl::roundUp(columns * size_t(l.height), 16), 16);
@@ -138,7 +146,7 @@ void shIgiFilterShade(cl::Context& ctx, cl::Kernel& filter, bool separable, cons
   filter.args(l.width, l.height, l.pitch, l.pad, planes, g.position, g.normal, g.albedo, g.specular, g.view, tauZ,
               cosTauN, int(sameInstance), int(glossy), out);
   // GI_VW pixels of kShIgiFilterRows rows per work-item, row-major.
-  const size_t columns = size_t(l.width + shIgiVectorWidth(ctx) - 1) / size_t(shIgiVectorWidth(ctx));
+  const size_t columns = size_t(l.width + shIgiFilterVectorWidth(ctx) - 1) / size_t(shIgiFilterVectorWidth(ctx));
   const size_t blocks = size_t(l.height + kShIgiFilterRows - 1) / kShIgiFilterRows;
   ctx.launch(filter, cl::NDRange::d1(cl::roundUp(columns * blocks, 4), 4),
              label + (separable ? ": filter + shade (separable)" : ": filter + shade"));
