@@ -56,10 +56,31 @@ inline floatV shadow_pcf_viewV(global const GiView* views, global const uint* of
   intV x0 = max(ix - 1, 0), x2 = min(ix + 1, v->width - 1);
   intV r0 = max(iy - 1, 0) * v->width, r1 = iy * v->width, r2 = min(iy + 1, v->height - 1) * v->width;
   floatV one = (floatV)(1.0f), zero = (floatV)(0.0f);
+  floatV lit = zero;
+  if (v->width >= 4) {
+    // Each row's 3 taps from one 4-texel load per lane at xs = clamp(ix − 1, 0, W − 4) (3 loads
+    // and a transposition instead of 9 scalar gathers: −10 % CPU time of the voxel injection,
+    // docs/PERFORMANCE.md), the taps picked from it by their clamped columns. The same taps:
+    // the same bits (each adds 0 or 1).
+    intV xs = min(max(ix - 1, 0), v->width - 4);
+    intV j0 = x0 - xs, j1 = ix - xs, j2 = x2 - xs;
+    intV rows[3] = {r0, r1, r2};
+#define GI_PICK(j) GI_SEL(GI_SEL(d0, d1, (j) >= 1), GI_SEL(d2, d3, (j) >= 3), (j) >= 2)
+#pragma unroll
+    for (int r = 0; r < 3; ++r) {
+      floatV d0, d1, d2, d3;
+      GI_GATHER_SPAN4(float, map, rows[r] + xs, d0, d1, d2, d3)
+      lit += GI_SEL(zero, one, depth <= GI_PICK(j0));
+      lit += GI_SEL(zero, one, depth <= GI_PICK(j1));
+      lit += GI_SEL(zero, one, depth <= GI_PICK(j2));
+    }
+#undef GI_PICK
+  } else {
 #define GI_TAP(r, c) GI_SEL(zero, one, depth <= GI_GATHER(floatV, map, (r) + (c)))
-  floatV lit = GI_TAP(r0, x0) + GI_TAP(r0, ix) + GI_TAP(r0, x2) + GI_TAP(r1, x0) + GI_TAP(r1, ix) + GI_TAP(r1, x2) +
-               GI_TAP(r2, x0) + GI_TAP(r2, ix) + GI_TAP(r2, x2);
+    lit = GI_TAP(r0, x0) + GI_TAP(r0, ix) + GI_TAP(r0, x2) + GI_TAP(r1, x0) + GI_TAP(r1, ix) + GI_TAP(r1, x2) +
+          GI_TAP(r2, x0) + GI_TAP(r2, ix) + GI_TAP(r2, x2);
 #undef GI_TAP
+  }
   return GI_SEL(lit * (1.0f / 9.0f), one, lit1);
 }
 
