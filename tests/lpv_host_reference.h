@@ -97,7 +97,8 @@ inline Grid propagate(const Grid& src, const std::vector<glm::vec4>& geometry, b
             }
             for (const Face& f : facesFor(d)) {
               float w = f.solidAngle / kPi;
-              if (blocking) w *= 1.0f - std::clamp(glm::dot(g, basis(-f.eval)), 0.0f, 1.0f);
+              // The device stores each face factor in half precision (lpv_face_factors).
+              if (blocking) w = roundToHalf(w * (1.0f - std::clamp(glm::dot(g, basis(-f.eval)), 0.0f, 1.0f)));
               for (int ch = 0; ch < 3; ++ch) {
                 float intensity = std::max(glm::dot(src.c[src.index(k, ch, nb)], basis(f.eval)), 0.0f);
                 dst.c[dst.index(k, ch, c)] += intensity * w * lobe(f.emit);

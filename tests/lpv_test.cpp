@@ -251,8 +251,15 @@ TEST(LpvKernels, PropagationMatchesHost) {
   double errStep = relativeMaxError(v.readCurrent(), cur.c);
   double errAcc = relativeMaxError(v.readAccumulated(), acc.c);
   std::printf("propagation, 3 steps with blocking: max error %.2e (last step), %.2e (accumulated)\n", errStep, errAcc);
-  EXPECT_LT(errStep, 1e-5);
-  EXPECT_LT(errAcc, 1e-5);
+  // Both sides round each face factor T_f to half precision (lpv_face_factors, lpvref::propagate),
+  // from float values that differ in their last bits (fused multiply-adds on the device): where
+  // the two lie on either side of a half rounding boundary (about 2e-4 of the factors: a float
+  // difference of ~1e-7 against a half step of 2^-11) they differ by one half step, 2^-11·T_f,
+  // which moves that face's flux by 2^-11 of itself — at most 2^-11 · T_f,max (0.135) · LOBE0
+  // (0.886) · max I / max c (< 1 here) ≈ 6e-5 of the largest coefficient per flipped factor, and
+  // a cell can hold a few. Without factor rounding the two agree to 4e-7 (1e-5 was the bound).
+  EXPECT_LT(errStep, 2e-4);
+  EXPECT_LT(errAcc, 2e-4);
 }
 
 // The lookup from a buffer (the kernel interpolates) or from a 3D image (the sampler does; PoCL

@@ -14,6 +14,9 @@
 //   lpv_resolve_geometry  fixed-point sums -> blocking potential per node: of the two surfel sources
 //                         (RSM, camera) the one that saw more surface at the node (larger DC term);
 //                         summing both would count a surface seen by both twice.
+//   lpv_face_factors      the 30 face transmittances T_f of every cell (6 neighbours × 5 faces) from
+//                         those potentials, once per frame, in half precision: the blocked step
+//                         only reads them.
 //   lpv_face_geometry     blocking potential per cell face (mean of its 4 corner nodes), once per
 //                         frame: the geometry volume does not change over the steps.
 //   lpv_propagate_blocked, lpv_propagate_open
@@ -41,6 +44,7 @@
 //   gridAcc  long   [cascade][channel][cell][4]: fixed-point injection sums
 //   geometry float planes [cascade][coefficient][node]; geometryAcc long [cascade][source rsm, camera][node][4]
 //   faceGeometry half row blocks [cascade][z][y][axis][coefficient][x] (laid out like grid)
+//   faceFactors half row blocks [cascade][z][y][direction·5 + face][x] (LPV_FACTOR_AT)
 //   lookupGrid float4 [cascade][cell][channel] (LPV_LOOKUP_AT; [cascade][channel][cell] when it is
 //            copied into a 3D image)
 //   cascades float4 [cascade]: (origin xyz of cell (0,0,0)'s corner, cell edge s), metres
@@ -65,6 +69,11 @@
 #define LPV_SLICE (LPV_ROW * LPV_N + LPV_SKEW)
 // Float offset (after the LPV_PAD floats of padding) of plane p of cell (x, y, z) in cascade k.
 #define LPV_AT(k, p, x, y, z) ((size_t)((k) * LPV_N + (z)) * LPV_SLICE + (size_t)(y) * LPV_ROW + (p) * LPV_N + (x))
+// The face factors' row blocks: 30 planes per row, slices skewed like the grid's.
+#define LPV_FACTOR_ROW (30 * LPV_N)
+#define LPV_FACTOR_SLICE (LPV_FACTOR_ROW * LPV_N + LPV_SKEW)
+#define LPV_FACTOR_AT(k, p, x, y, z) \
+  ((size_t)((k) * LPV_N + (z)) * LPV_FACTOR_SLICE + (size_t)(y) * LPV_FACTOR_ROW + (p) * LPV_N + (x))
 #define LPV_M (LPV_N + 1)
 #define LPV_NODES (LPV_M * LPV_M * LPV_M)
 
@@ -443,9 +452,8 @@ inline void lpv_store_lookup_cells(const floatL* c, constant float4* cascades, i
 // change over the propagation steps): the mean of the 4 corner nodes of the face between cell
 // c − e_a and c. Plane p = a·4 + coefficient of the grids' row-block layout (LPV_AT). Stored in
 // half precision (rounded to nearest, 11 significant bits: relative error <= 2.4e-4, far below the
-// approximation of a cell face's occluders by 4 SH coefficients), clamped to half's finite range:
-// the blocked step reads these 12 values per cell every step, and at 2 bytes each that stream is
-// half as long (tests/lpv_host_reference.h rounds the same way).
+// approximation of a cell face's occluders by 4 SH coefficients), clamped to half's finite range
+// (tests/lpv_host_reference.h rounds the same way); lpv_face_factors turns them into the factors.
 // LPV_LANES cells of a row per work-item (contiguous node loads), global (N / LPV_LANES, N,
 // N · 3 · LPV_CASCADES) with z + N·(k·3 + a) along the third axis.
 kernel void lpv_face_geometry(global const float* geometry, global half* faceGeometry) {
@@ -486,6 +494,52 @@ inline void lpv_transmittance(int dir, const floatL* g, floatL mainMax, floatL s
   t[4] = fmin(fmax(openSide - sideB2, 0.0f), sideMax);
 }
 
+// The unblocked factors ΔΩ_f/π of the main and side faces for the 6 directions, for LPV_LANES
+// cells of a row from x0; 0 in the lanes whose x neighbour (x − 1 for dir 0, x + 1 for dir 1) lies
+// outside the grid: a zero factor there replaces a select on each of the neighbour's 12 coefficients.
+inline void lpv_open_factors(int x0, floatL* maxMain, floatL* maxSide) {
+  intL x = x0 + LPV_LANE_IDS;
+  const float mainWeight = LPV_MAIN_FACE_SOLID_ANGLE * GI_INV_PI, sideWeight = LPV_SIDE_FACE_SOLID_ANGLE * GI_INV_PI;
+  intL inside[2] = {x >= 1, x < LPV_N - 1};
+#pragma unroll
+  for (int dir = 0; dir < 6; ++dir) {
+    maxMain[dir] = dir < 2 ? select((floatL)(0.0f), (floatL)(mainWeight), inside[dir]) : (floatL)(mainWeight);
+    maxSide[dir] = dir < 2 ? select((floatL)(0.0f), (floatL)(sideWeight), inside[dir]) : (floatL)(sideWeight);
+  }
+}
+
+// The 30 face factors T_f of LPV_LANES cells of a row (6 neighbour directions × 5 faces, plane
+// dir·5 + face of LPV_FACTOR_AT), once per frame: the geometry volume does not change over the
+// steps. Computed in every blocked step instead, the 30 factors of a work-item did not fit in
+// AVX2's 16 registers: their arithmetic and spills were about a fifth of the step's instructions
+// (1367 against 1076 per 8 cells reading them). Stored in half precision (rounded to nearest,
+// relative error <= 2^-11; tests/lpv_host_reference.h rounds the same way): 60 bytes per cell and
+// step; in float (120 bytes) the extra stream cost more than the arithmetic saved. The x
+// neighbours outside the grid get factor 0 in their lanes; a y or z neighbour row outside the
+// grid (its factors are not used) is given the cell's own face in place of one that may lie past
+// the buffer. Global (N / LPV_LANES, N, N · LPV_CASCADES) with z + N·k along the third axis.
+kernel void lpv_face_factors(global const half* faceGeometry, global half* faceFactors) {
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2) % LPV_N;
+  int k = get_global_id(2) / LPV_N;
+  size_t row = LPV_PAD + LPV_AT(k, 0, x0, y, z);
+  global half* out = faceFactors + LPV_PAD + LPV_FACTOR_AT(k, 0, x0, y, z);
+  floatL maxMain[6], maxSide[6];
+  lpv_open_factors(x0, maxMain, maxSide);
+  bool inside[6] = {true, true, y >= 1, y < LPV_N - 1, z >= 1, z < LPV_N - 1};
+  const int stride[3] = {1, LPV_ROW, LPV_SLICE};
+#pragma unroll
+  for (int dir = 0; dir < 6; ++dir) {
+    // The shared face: the lower face along a of the cell itself (light along +a) or of the cell above.
+    global const half* face = faceGeometry + row + (dir / 2) * 4 * LPV_N + (inside[dir] && dir % 2 ? stride[dir / 2] : 0);
+    floatL g[4], t[5];
+#pragma unroll
+    for (int q = 0; q < 4; ++q) g[q] = vload_halfL(0, face + q * LPV_N);
+    lpv_transmittance(dir, g, maxMain[dir], maxSide[dir], t);
+#pragma unroll
+    for (int f = 0; f < 5; ++f) vstore_halfL_rte(t[f], 0, out + (dir * 5 + f) * LPV_N);
+  }
+}
+
 // Adds the light channel `in` (4 coefficients, grid units) of the neighbour in direction `dir`
 // sends through the destination's 5 faces: face fluxes T_f · max(0, I(ω_f)) into o[0] (sum of the
 // fluxes) and o[1..3] (signed along the re-emission axis), scaled by the lobe constants at the end.
@@ -523,10 +577,10 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, con
 }
 
 // One gather step of cascade k. Work-item = LPV_LANES destination cells of a row (global
-// (N / LPV_LANES, N, N)). The 30 face transmittances T_f first (from the shared faces' blocking
-// potential, kept in private memory), then channel after channel, so that only 4 accumulators and
-// one neighbour's 4 coefficients are live (16 float16 would not fit AVX2's registers). Two kernels
-// from one body: `lpv_propagate_blocked` reads the face potentials, `lpv_propagate_open` uses the
+// (N / LPV_LANES, N, N)). The 30 face transmittances T_f first (read from lpv_face_factors'
+// planes; they stay in private memory), then channel after channel, so that only 4 accumulators
+// and one neighbour's 4 coefficients are live (16 float16 would not fit AVX2's registers). Two
+// kernels from one body: `lpv_propagate_blocked` reads the face factors, `lpv_propagate_open` uses the
 // unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them — or
 // occlusion off) without loading or computing any factor; the blocking is a compile-time constant
 // in each, so neither carries the other's work.
@@ -539,37 +593,24 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, con
 #define LPV_ADD_SOURCE 2
 #define LPV_WRITE_LOOKUP 4
 inline void lpv_propagate_step(global const float* src, global float* dst, global float* accumulated,
-                               global const half* faceGeometry, int k, int accumulate, constant float4* cascades,
+                               global const half* faceFactors, int k, int accumulate, constant float4* cascades,
                                global float4* lookupGrid, const bool blocking) {
   int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2);
   size_t row = LPV_PAD + LPV_AT(k, 0, x0, y, z);  // plane 0 of the work-item's first cell
-  intL x = x0 + LPV_LANE_IDS;
-  const float mainWeight = LPV_MAIN_FACE_SOLID_ANGLE * GI_INV_PI, sideWeight = LPV_SIDE_FACE_SOLID_ANGLE * GI_INV_PI;
-  // Neighbours at x − 1 (dir 0) and x + 1 (dir 1) outside the grid: zero factors in those lanes.
-  intL insideLeft = x >= 1, insideRight = x < LPV_N - 1;
-  const floatL mainMax[2] = {select((floatL)(0.0f), (floatL)(mainWeight), insideLeft),
-                             select((floatL)(0.0f), (floatL)(mainWeight), insideRight)};
-  const floatL sideMax[2] = {select((floatL)(0.0f), (floatL)(sideWeight), insideLeft),
-                             select((floatL)(0.0f), (floatL)(sideWeight), insideRight)};
   bool inside[6] = {true, true, y >= 1, y < LPV_N - 1, z >= 1, z < LPV_N - 1};
   const int stride[3] = {1, LPV_ROW, LPV_SLICE};
+  floatL maxMain[6], maxSide[6];  // the open step's factors
+  if (!blocking) lpv_open_factors(x0, maxMain, maxSide);
   floatL t[6][5];
 #pragma unroll
   for (int dir = 0; dir < 6; ++dir) {
-    floatL maxMain = dir < 2 ? mainMax[dir] : (floatL)(mainWeight), maxSide = dir < 2 ? sideMax[dir] : (floatL)(sideWeight);
     if (blocking) {
-      // The shared face: the lower face along a of the cell itself (light along +a) or of the
-      // cell above. For a y or z neighbour row outside the grid (its factors are not used) the
-      // cell's own face is read in place of one that may lie past the buffer.
-      global const half* face =
-          faceGeometry + row + (dir / 2) * 4 * LPV_N + (inside[dir] && dir % 2 ? stride[dir / 2] : 0);
-      floatL g[4];
+      global const half* factors = faceFactors + LPV_PAD + LPV_FACTOR_AT(k, dir * 5, x0, y, z);
 #pragma unroll
-      for (int q = 0; q < 4; ++q) g[q] = vload_halfL(0, face + q * LPV_N);
-      lpv_transmittance(dir, g, maxMain, maxSide, t[dir]);
+      for (int f = 0; f < 5; ++f) t[dir][f] = vload_halfL(0, factors + f * LPV_N);
     } else {
-      t[dir][0] = maxMain;
-      t[dir][1] = t[dir][2] = t[dir][3] = t[dir][4] = maxSide;
+      t[dir][0] = maxMain[dir];
+      t[dir][1] = t[dir][2] = t[dir][3] = t[dir][4] = maxSide[dir];
     }
   }
 #pragma unroll
@@ -606,9 +647,9 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
 }
 
 kernel void lpv_propagate_blocked(global const float* src, global float* dst, global float* accumulated,
-                                  global const half* faceGeometry, int k, int accumulate,
+                                  global const half* faceFactors, int k, int accumulate,
                                   constant float4* cascades, global float4* lookupGrid) {
-  lpv_propagate_step(src, dst, accumulated, faceGeometry, k, accumulate, cascades, lookupGrid, true);
+  lpv_propagate_step(src, dst, accumulated, faceFactors, k, accumulate, cascades, lookupGrid, true);
 }
 
 kernel void lpv_propagate_open(global const float* src, global float* dst, global float* accumulated, int k,

@@ -121,6 +121,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   resolveInjection_ = program_.kernel("lpv_resolve_injection");
   resolveGeometry_ = program_.kernel("lpv_resolve_geometry");
   faceGeometryKernel_ = program_.kernel("lpv_face_geometry");
+  faceFactorsKernel_ = program_.kernel("lpv_face_factors");
   propagateBlocked_ = program_.kernel("lpv_propagate_blocked");
   propagateOpen_ = program_.kernel("lpv_propagate_open");
   toLookupGrid_ = program_.kernel("lpv_lookup_grid");
@@ -141,6 +142,11 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   faceGeometry_ = cl::Buffer(ctx, gridFloats() * sizeof(uint16_t), CL_MEM_READ_WRITE,  // half precision
                              "lpv face blocking potential");
   ctx.fill(faceGeometry_, 0.0f);  // padding and skew stay 0
+  // 30 face factors per cell in half precision, row blocks (lpv.cl LPV_FACTOR_AT): per cascade N
+  // slices of 30·N² + kSkew.
+  size_t factorHalves = kPad + size_t(cascades_) * n_ * (30 * size_t(n_) * n_ + kSkew);
+  faceFactors_ = cl::Buffer(ctx, factorHalves * sizeof(uint16_t), CL_MEM_READ_WRITE, "lpv face factors");
+  ctx.fill(faceFactors_, uint16_t(0));  // padding and skew stay 0
   lookupGrid_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv lookup grid");
   // One row of cells per work-group: many groups, which PoCL spreads over the cores.
   propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_));  // one cascade
@@ -161,7 +167,7 @@ size_t LpvVolume::gridOffset(int k, int p, size_t cell) const {
 
 uint64_t LpvVolume::bytes() const {
   return layout_.bytes() + gridAcc_.bytes() + geometryAcc_.bytes() + grids_[0].bytes() + grids_[1].bytes() +
-         accumulated_.bytes() + geometry_.bytes() + faceGeometry_.bytes() + lookupGrid_.bytes() +
+         accumulated_.bytes() + geometry_.bytes() + faceGeometry_.bytes() + faceFactors_.bytes() + lookupGrid_.bytes() +
          (lookupImage_.get() ? lookupImage_.bytes() : 0);
 }
 
@@ -260,6 +266,9 @@ void LpvVolume::propagate(int iterations, bool blocking) {
     faceGeometryKernel_.args(geometry_, faceGeometry_);
     ctx_.launch(faceGeometryKernel_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * 3 * cascades_),
                 "lpv: propagate");
+    faceFactorsKernel_.args(faceGeometry_, faceFactors_);
+    ctx_.launch(faceFactorsKernel_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * cascades_),
+                "lpv: propagate");
   }
   // Cascade after cascade, all steps of one before the next: a step touches 6 MB per 32³ cascade
   // (two grids, the accumulated grid, the face potentials), which the last-level cache holds for
@@ -277,7 +286,7 @@ void LpvVolume::propagate(int iterations, bool blocking) {
       int accumulate = (i % 2 ? addThis | addSource : last ? addThis : 0) | (last ? writeLookup : 0);
       // The first step leaves blocking out: the VPLs sit next to the surfaces they were lit on.
       if (blocking && i > 0) {
-        propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceGeometry_, k, accumulate,
+        propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceFactors_, k, accumulate,
                                layout_, lookupGrid_);
         ctx_.launch(propagateBlocked_, propagateRange_, "lpv: propagate");
       } else {

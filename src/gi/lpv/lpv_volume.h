@@ -91,7 +91,8 @@ public:
   void addGeometryCamera(const GBuffer& g);
   void resolve(bool geometry);  // sums -> float grids (the geometry volume only when asked)
   // `iterations` gather steps; with `blocking`, first the blocking potential per cell face from
-  // the geometry volume (static over the steps), which blocks every step but the first.
+  // the geometry volume and from it the 30 face factors per cell (static over the steps), which
+  // block every step but the first.
   void propagate(int iterations, bool blocking);
   // Converts the accumulated grid into the lookup grid unless the last propagation step already
   // did, then writes L = ρ/π · E per pixel.
@@ -115,9 +116,9 @@ private:
   int n_, cascades_, vw_, lanes_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
   float injectionScale_ = 1.0f;
   cl::Program program_;
-  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, faceGeometryKernel_, propagateBlocked_, propagateOpen_,
+  cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, faceGeometryKernel_, faceFactorsKernel_, propagateBlocked_, propagateOpen_,
       toLookupGrid_, lookup_;
-  cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, faceGeometry_, lookupGrid_;
+  cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, faceGeometry_, faceFactors_, lookupGrid_;
   LpvImage lookupImage_;  // with LpvLookupStorage::Image: lookupGrid_'s copy the lookup samples
   cl::NDRange propagateRange_;
   int current_ = 0;
