@@ -245,13 +245,15 @@ kernel void sh_igi_project(int width, int height, int n, int m, int pitch, int p
 // lanes and GI_FY = 4; with 16 rows the 33 KB no longer fit L1 and it was slower).
 #define SH_FILTER_ROWS 8  // host: kShIgiFilterRows
 
+// The filters' helpers are always inlined: PoCL left sh_shading a call (its ShShading through
+// memory), ≈ 30 % of the filters' CPU time in a symbol of its own.
 // The filter's keys of GI_VW consecutive pixels: `q` is plane 0 of their row block at their first pixel.
 typedef struct {
   floatV z, tz, nx, ny, nz;
   uintV id;
 } ShKeys;
 
-inline ShKeys sh_keys(global const float* q, int pitch, float tauZ) {
+inline __attribute__((always_inline)) ShKeys sh_keys(global const float* q, int pitch, float tauZ) {
   ShKeys k;
   k.z = vloadV(0, q + (size_t)SH_DEPTH * pitch);
   k.nx = vloadV(0, q + (size_t)SH_NORMAL * pitch);
@@ -265,7 +267,7 @@ inline ShKeys sh_keys(global const float* q, int pitch, float tauZ) {
 // Weight 1 or 0 of neighbours q (plane 0 of their row block at their first pixel; columns qx) for
 // pixels with keys c: the §3 test — inside the image, a surface, |Δz| ≤ τ_z·z, geometric normals
 // within τ_n, and, when asked, the same instance id.
-inline floatV sh_weight(global const float* q, int pitch, ShKeys c, intV qx, int width, float cosTauN,
+inline __attribute__((always_inline)) floatV sh_weight(global const float* q, int pitch, ShKeys c, intV qx, int width, float cosTauN,
                         int sameInstance) {
   uintV qid = vloadV(0, (global const uint*)(q + (size_t)SH_ID * pitch));
   floatV dz = fabs(vloadV(0, q + (size_t)SH_DEPTH * pitch) - c.z);
@@ -292,7 +294,7 @@ typedef struct {
 
 #define SH_BAND(k) ((k) == 0 ? 0 : (k) < 4 ? 1 : 2)
 
-inline void sh_shading(int width, int x0, int y, uintV id, global const float* gPosition, global const float* gNormal,
+inline __attribute__((always_inline)) void sh_shading(int width, int x0, int y, uintV id, global const float* gPosition, global const float* gNormal,
                        global const float* gAlbedo, global const float* gSpecular, GiView camera, int glossy,
                        ShShading* s) {
   intV x = x0 + GI_LANES;
@@ -340,7 +342,7 @@ inline void sh_shading(int width, int x0, int y, uintV id, global const float* g
 }
 
 // The zonal sums of one channel's 9 filtered (not yet renormalised) coefficients.
-inline void sh_fold(const ShShading* s, const floatV* acc, floatV* diffuse, floatV* specular) {
+inline __attribute__((always_inline)) void sh_fold(const ShShading* s, const floatV* acc, floatV* diffuse, floatV* specular) {
   floatV e = (floatV)(0.0f), sp = (floatV)(0.0f);
 #pragma unroll
   for (int k = 0; k < SH_N; ++k) {
@@ -352,7 +354,7 @@ inline void sh_fold(const ShShading* s, const floatV* acc, floatV* diffuse, floa
 }
 
 // L = ρ/π · max(0, inv · diffuse) + F0 · max(0, inv · specular) per channel, written to camera order.
-inline void sh_write(const ShShading* s, const floatV* diffuse, const floatV* specular, floatV inv, int glossy,
+inline __attribute__((always_inline)) void sh_write(const ShShading* s, const floatV* diffuse, const floatV* specular, floatV inv, int glossy,
                      int width, int x0, int y, global float* out) {
   floatV zero = (floatV)(0.0f);
   floatV res[3];
