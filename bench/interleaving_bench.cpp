@@ -15,10 +15,11 @@
 // "[vs splat 1x1]" compare with the un-interleaved splat, the thesis's SII comparison; interleaved
 // splatting is masked per lane, so its time is not an interleaving speed-up). `rsm` (RSM gather
 // with N samples per pixel, half resolution) is timed and compared un-interleaved.
-// Scene: the Cornell box with blocks under the downward spot light (as in the tests), indirect
-// light only. Prints markdown tables (docs/results/interleaving.md records a run).
+// Scene: by default the Cornell box with blocks under the downward spot light (as in the tests);
+// `--scene` takes any scene spec `gi` accepts (e.g. scenes/sponza.json, with its own lights and
+// camera). Indirect light only. Prints markdown tables (docs/results/interleaving.md records runs).
 //
-//   build/interleaving_bench [--size 256] [--spp 512] [--frames 5]
+//   build/interleaving_bench [--size 256] [--width W --height H] [--spp 512] [--frames 5] [--scene SPEC]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -32,6 +33,7 @@
 #include "render/renderer.h"
 #include "render/views.h"
 #include "scene/cornell_box.h"
+#include "scene/scene_loader.h"
 
 using namespace gi;
 
@@ -47,9 +49,11 @@ struct Result {
   Image indirect;
 };
 
-Result run(cl::Context& ctx, const Scene& s, int size, int frames, const std::string& tech, std::vector<std::string> sets) {
+Result run(cl::Context& ctx, const Scene& s, int width, int height, int frames, const std::string& tech,
+           std::vector<std::string> sets) {
   RenderSettings rs;
-  rs.width = rs.height = size;
+  rs.width = width;
+  rs.height = height;
   rs.technique = tech;
   rs.sets = std::move(sets);
   Renderer r(ctx, s, rs);
@@ -83,11 +87,22 @@ double intensitySsd(const Image& a, const Image& b, float exposure) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int size = 256, spp = 512, frames = 5;
-  const char* usage = "usage: interleaving_bench [--size 256] [--spp 512] [--frames 5]\n";
+  int size = 256, width = 0, height = 0, spp = 512, frames = 5;
+  std::string sceneSpec;  // empty: the Cornell box with blocks under the spot light
+  const char* usage =
+      "usage: interleaving_bench [--size 256] [--width W --height H] [--spp 512] [--frames 5] [--scene SPEC]\n";
   for (int i = 1; i < argc; i += 2) {
     std::string k = argv[i];
-    int* target = k == "--size" ? &size : k == "--spp" ? &spp : k == "--frames" ? &frames : nullptr;
+    if (k == "--scene" && i + 1 < argc) {
+      sceneSpec = argv[i + 1];
+      continue;
+    }
+    int* target = k == "--size"     ? &size
+                  : k == "--width"  ? &width
+                  : k == "--height" ? &height
+                  : k == "--spp"    ? &spp
+                  : k == "--frames" ? &frames
+                                    : nullptr;
     char* end = nullptr;
     long v = i + 1 < argc ? std::strtol(argv[i + 1], &end, 10) : 0;
     if (!target || i + 1 >= argc || *end != '\0' || v < 1 || v > 100000) {
@@ -97,34 +112,45 @@ int main(int argc, char** argv) {
     }
     *target = int(v);
   }
+  if (width == 0) width = size;
+  if (height == 0) height = size;
   try {
     cl::Context ctx(cl::selectDevice(""));
-    CornellOptions o;
-    o.withAreaLight = false;
-    o.spotLight = CornellSpotLight{};
-    o.spotLight->intensity = glm::vec3(1.2f, 1.0f, 0.8f);
-    Scene s = makeCornellBox(o);
+    Scene s;
+    std::string sceneName = "Cornell box (blocks), spot light";
+    if (sceneSpec.empty()) {
+      CornellOptions o;
+      o.withAreaLight = false;
+      o.spotLight = CornellSpotLight{};
+      o.spotLight->intensity = glm::vec3(1.2f, 1.0f, 0.8f);
+      s = makeCornellBox(o);
+    } else {
+      s = loadScene(sceneSpec, "");
+      sceneName = sceneSpec;
+    }
     RenderSettings rs;
-    rs.width = rs.height = size;
+    rs.width = width;
+    rs.height = height;
     Renderer probe(ctx, s, rs);
     PathTracerOptions po;
-    po.width = po.height = size;
+    po.width = width;
+    po.height = height;
     po.mode = ReferenceMode::OneBounce;
     po.diffuseOnly = true;
     po.seed = 1;
-    PathTracer pt(ctx, s, makeCameraView(probe.camera(), size, size), po);
+    PathTracer pt(ctx, s, makeCameraView(probe.camera(), width, height), po);
     while (pt.samplesDone() < spp) pt.addSamples(std::min(64, spp - pt.samplesDone()));
     Image ref = pt.image();
     Image refDisplay = displayTransform(ref, s.exposure);
-    std::printf("# Interleaving experiment: Cornell box (blocks), spot light, %dx%d, indirect only, %s, GI_VW=%d\n",
-                size, size, ctx.device().name.c_str(), ctx.vectorWidth());
+    std::printf("# Interleaving experiment: %s, %dx%d, indirect only, %s, GI_VW=%d\n", sceneName.c_str(), width,
+                height, ctx.device().name.c_str(), ctx.vectorWidth());
     std::printf("reference: path tracer, one-bounce indirect, diffuse only, %d spp\n\n", spp);
     std::printf("| technique | N | pattern | time (ms) | speed-up vs 1x1 | SSD vs 1x1 | SSIM vs reference | relMSE vs reference |\n");
     std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
     const std::vector<std::pair<int, int>> patterns = {{2, 2}, {2, 4}, {4, 4}, {8, 8}};
     for (int n : {64, 128, 256, 512, 1024}) {
       std::string N = std::to_string(n);
-      Result base = run(ctx, s, size, frames, "vpl", {"vpl.count=" + N});
+      Result base = run(ctx, s, width, height, frames, "vpl", {"vpl.count=" + N});
       auto row = [&](const char* tech, const std::string& pat, const Result& r, const Result& b) {
         double ssim = metrics::ssim(refDisplay, displayTransform(r.indirect, s.exposure)).mean;
         std::printf("| %s | %d | %s | %.3f | %.1fx | %.4g | %.4f | %.4g |\n", tech, n, pat.c_str(), r.ms, b.ms / r.ms,
@@ -133,26 +159,26 @@ int main(int argc, char** argv) {
       row("gather (vpl)", "1x1", base, base);
       for (const char* filter : {"box", "separable"})
         for (auto [pn, pm] : patterns) {
-          Result r = run(ctx, s, size, frames, "igi",
+          Result r = run(ctx, s, width, height, frames, "igi",
                          {"igi.count=" + N, "igi.n=" + std::to_string(pn), "igi.m=" + std::to_string(pm),
                           std::string("igi.filter=") + filter});
           row(filter == std::string("box") ? "gather (igi)" : "gather (igi, separable filter)",
               std::to_string(pn) + "x" + std::to_string(pm), r, base);
         }
-      Result sp = run(ctx, s, size, frames, "splat", {"splat.count=" + N});
+      Result sp = run(ctx, s, width, height, frames, "splat", {"splat.count=" + N});
       row("splat eps=1/256", "1x1", sp, base);
-      Result sp4 = run(ctx, s, size, frames, "splat", {"splat.count=" + N, "splat.epsilon=1e-4"});
+      Result sp4 = run(ctx, s, width, height, frames, "splat", {"splat.count=" + N, "splat.epsilon=1e-4"});
       row("splat eps=1e-4", "1x1", sp4, base);
       // Interleaved splatting against the un-interleaved splat (the thesis's SII comparison).
       for (const char* ord : {"stride", "contiguous"})
         for (auto [pn, pm] : patterns) {
-          Result r = run(ctx, s, size, frames, "splat",
+          Result r = run(ctx, s, width, height, frames, "splat",
                          {"splat.count=" + N, "splat.epsilon=1e-4", "splat.n=" + std::to_string(pn),
                           "splat.m=" + std::to_string(pm), std::string("splat.ordering=") + ord});
           row((std::string("splat eps=1e-4 ") + ord + " [vs splat 1x1]").c_str(),
               std::to_string(pn) + "x" + std::to_string(pm), r, sp4);
         }
-      Result rg = run(ctx, s, size, frames, "rsm", {"rsm.samples=" + N});
+      Result rg = run(ctx, s, width, height, frames, "rsm", {"rsm.samples=" + N});
       row("rsm gather (N samples, half res)", "1x1", rg, base);
     }
   } catch (const std::exception& e) {
