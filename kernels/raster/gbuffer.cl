@@ -7,6 +7,7 @@
 #include "common/material.h"
 #include "raster/view.h"
 #include "common/vector_width.h"
+#include "common/texture_lanes.h"
 #include "common/lights_lanes.h"
 
 // Both kernels handle GI_VW adjacent pixels of a row per work-item (16 lanes on CPU devices, 1 on
@@ -14,75 +15,6 @@
 // source triangle (ray_triangle_barycentrics), interpolated attributes, ray-cone texture level of
 // detail (texture_lod), then sample_texture(), eval_material() and apply_normal_map() of common/,
 // all written over floatV lanes with gathers for per-triangle, per-material and per-texel data.
-
-typedef struct {
-  floatV x, y, z, w;
-} float4V;
-
-// sample_texture() for per-lane texture indices (lanes with index < 0 are not used by callers
-// and read texture 0; callers only come here when some lane has a texture).
-inline float4V sample_textureV(global const GiTexture* table, global const uchar4* texels, intV index, floatV u,
-                               floatV v, floatV lod) {
-  global const int* tab = (global const int*)table;
-  intV ti = max(index, 0) * 8;  // GiTexture is 8 ints: offset, width, height, levels, srgb, pad
-  intV offsetBits, w, h, levels;
-  GI_GATHER_SPAN4(int, tab, ti, offsetBits, w, h, levels)
-  uintV offset = as_uintV(offsetBits);
-  intV srgb = GI_GATHER(intV, tab, ti + 4);
-  intV level = clamp(convert_intV(lod + 0.5f), 0, levels - 1);
-  // Level offsets: step every lane up to the largest level among the lanes.
-  int top = 0;
-#if GI_VW == 1
-  top = level;
-#else
-  {
-    int lv[GI_VW];
-    vstoreV(level, 0, lv);
-    for (int l = 0; l < GI_VW; ++l) top = max(top, lv[l]);
-  }
-#endif
-  for (int l = 0; l < top; ++l) {
-    intV m = (intV)(l) < level;
-    offset += as_uintV(GI_SEL((intV)(0), w * h, m));
-    w = GI_SEL(w, max(1, w >> 1), m);
-    h = GI_SEL(h, max(1, h >> 1), m);
-  }
-  floatV wf = convert_floatV(w), hf = convert_floatV(h);
-  floatV fx = u * wf - 0.5f, fy = v * hf - 0.5f;
-  intV bad = !isfinite(fx) | !isfinite(fy);
-  fx = GI_SEL(fx, (floatV)(0.0f), bad);
-  fy = GI_SEL(fy, (floatV)(0.0f), bad);
-  fx -= floor(fx / wf) * wf;
-  fy -= floor(fy / hf) * hf;
-  floatV x0f = floor(fx), y0f = floor(fy);
-  floatV ax = GI_SEL(fx - x0f, (floatV)(0.0f), bad), ay = GI_SEL(fy - y0f, (floatV)(0.0f), bad);
-  intV x0 = min(convert_intV(x0f), w - 1), y0 = min(convert_intV(y0f), h - 1);
-  intV x1 = GI_SEL(x0 + 1, (intV)(0), x0 + 1 == w), y1 = GI_SEL(y0 + 1, (intV)(0), y0 + 1 == h);
-  global const uint* px = (global const uint*)texels;
-  uintV c00 = GI_GATHER(uintV, px, offset + as_uintV(y0 * w + x0));
-  uintV c10 = GI_GATHER(uintV, px, offset + as_uintV(y0 * w + x1));
-  uintV c01 = GI_GATHER(uintV, px, offset + as_uintV(y1 * w + x0));
-  uintV c11 = GI_GATHER(uintV, px, offset + as_uintV(y1 * w + x1));
-  intV isSrgb = srgb != 0;
-  bool anySrgb = GI_ANY(isSrgb);
-  float4V r;
-#define GI_CH(c, sh) convert_intV(((c) >> (sh)) & 0xFFu)
-#define GI_DECODE(c, sh) \
-  (anySrgb ? GI_SEL(convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f), GI_GATHER(floatV, GI_SRGB_TO_LINEAR, GI_CH(c, sh)), isSrgb) \
-           : convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f))
-#define GI_BILERP(out, sh, DEC) \
-  out = mix(mix(DEC(c00, sh), DEC(c10, sh), ax), mix(DEC(c01, sh), DEC(c11, sh), ax), ay);
-#define GI_LINEAR(c, sh) (convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f))
-  GI_BILERP(r.x, 0, GI_DECODE)
-  GI_BILERP(r.y, 8, GI_DECODE)
-  GI_BILERP(r.z, 16, GI_DECODE)
-  GI_BILERP(r.w, 24, GI_LINEAR)
-#undef GI_CH
-#undef GI_DECODE
-#undef GI_BILERP
-#undef GI_LINEAR
-  return r;
-}
 
 typedef struct {
   float3V position, geoNormal, normal, shading, diffuse, f0, emission;

@@ -13,6 +13,7 @@
 // spread over SIMD lanes (section "Voxelization in lanes" below); same accumulator bits.
 #include "common/material.h"
 #include "common/vector_width.h"
+#include "common/texture_lanes.h"
 #include "gi/vct/voxel_types.h"
 
 #define GI_VOX_GROW 1e-4f  // relative growth of the voxel for the overlap test
@@ -308,17 +309,6 @@ kernel void vct_exclusive_scan(global uint* counts, uint n, global uint* total) 
 }
 
 // Largest lane value (GI_VW lanes).
-inline int vox_lane_max(intV v) {
-#if GI_VW == 1
-  return v;
-#else
-  int lv[GI_VW];
-  vstoreV(v, 0, lv);
-  int m = lv[0];
-  for (int l = 1; l < GI_VW; ++l) m = max(m, lv[l]);
-  return m;
-#endif
-}
 
 // tri_box_overlap() lane-wise: the same expressions, each lane its own triangle and box.
 inline intV tri_box_overlapV(float3V a, float3V b, float3V c, float h) {
@@ -380,74 +370,6 @@ inline void nearest_on_triangleV(float3V p, float3V a, float3V b, float3V c, flo
   m = (d1 <= 0.0f) & (d2 <= 0.0f);
   *bu = GI_SEL(u, zero, m);
   *bv = GI_SEL(v, zero, m);
-}
-
-// One mip level of a texture per lane (sample_texture's level choice), chosen once per column:
-// a triangle's level of detail is constant.
-typedef struct {
-  uintV offset;
-  intV w, h, srgb;
-} GiTexLevelV;
-
-inline GiTexLevelV vox_texture_levelV(global const GiTexture* table, intV index, floatV lod) {
-  global const int* tab = (global const int*)table;
-  intV ti = max(index, 0) * 8;  // GiTexture: 8 ints (offset, width, height, levels, srgb, pad)
-  GiTexLevelV r;
-  intV offsetBits, levels;
-  GI_GATHER_SPAN4(int, tab, ti, offsetBits, r.w, r.h, levels)
-  r.offset = as_uintV(offsetBits);
-  r.srgb = GI_GATHER(intV, tab, ti + 4);
-  intV level = clamp(convert_intV(lod + 0.5f), 0, levels - 1);
-  int top = vox_lane_max(level);
-  for (int l = 0; l < top; ++l) {
-    intV m = (intV)(l) < level;
-    r.offset += as_uintV(GI_SEL((intV)(0), r.w * r.h, m));
-    r.w = GI_SEL(r.w, max(1, r.w >> 1), m);
-    r.h = GI_SEL(r.h, max(1, r.h >> 1), m);
-  }
-  return r;
-}
-
-typedef struct {
-  floatV x, y, z, w;
-} GiVoxFloat4V;
-
-// sample_texture()'s bilinear lookup at the lanes' chosen levels.
-inline GiVoxFloat4V vox_sample_levelV(global const uchar4* texels, GiTexLevelV t, floatV u, floatV v) {
-  floatV wf = convert_floatV(t.w), hf = convert_floatV(t.h);
-  floatV fx = u * wf - 0.5f, fy = v * hf - 0.5f;
-  intV bad = !isfinite(fx) | !isfinite(fy);  // sample_texture: texel (0, 0)
-  fx = GI_SEL(fx, (floatV)(0.0f), bad);
-  fy = GI_SEL(fy, (floatV)(0.0f), bad);
-  fx -= floor(fx / wf) * wf;
-  fy -= floor(fy / hf) * hf;
-  floatV x0f = floor(fx), y0f = floor(fy);
-  floatV ax = GI_SEL(fx - x0f, (floatV)(0.0f), bad), ay = GI_SEL(fy - y0f, (floatV)(0.0f), bad);
-  intV x0 = min(convert_intV(x0f), t.w - 1), y0 = min(convert_intV(y0f), t.h - 1);
-  intV x1 = GI_SEL(x0 + 1, (intV)(0), x0 + 1 == t.w), y1 = GI_SEL(y0 + 1, (intV)(0), y0 + 1 == t.h);
-  global const uint* px = (global const uint*)texels;
-  uintV c00 = GI_GATHER(uintV, px, t.offset + as_uintV(y0 * t.w + x0));
-  uintV c10 = GI_GATHER(uintV, px, t.offset + as_uintV(y0 * t.w + x1));
-  uintV c01 = GI_GATHER(uintV, px, t.offset + as_uintV(y1 * t.w + x0));
-  uintV c11 = GI_GATHER(uintV, px, t.offset + as_uintV(y1 * t.w + x1));
-  intV isSrgb = t.srgb != 0;
-  bool anySrgb = GI_ANY(isSrgb);
-  GiVoxFloat4V r;
-#define GI_CH(c, sh) convert_intV(((c) >> (sh)) & 0xFFu)
-#define GI_DECODE(c, sh) \
-  (anySrgb ? GI_SEL(convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f), GI_GATHER(floatV, GI_SRGB_TO_LINEAR, GI_CH(c, sh)), isSrgb) \
-           : convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f))
-#define GI_LINEAR(c, sh) (convert_floatV(GI_CH(c, sh)) * (1.0f / 255.0f))
-#define GI_BILERP(out, sh, DEC) out = mix(mix(DEC(c00, sh), DEC(c10, sh), ax), mix(DEC(c01, sh), DEC(c11, sh), ax), ay);
-  GI_BILERP(r.x, 0, GI_DECODE)
-  GI_BILERP(r.y, 8, GI_DECODE)
-  GI_BILERP(r.z, 16, GI_DECODE)
-  GI_BILERP(r.w, 24, GI_LINEAR)
-#undef GI_CH
-#undef GI_DECODE
-#undef GI_LINEAR
-#undef GI_BILERP
-  return r;
 }
 
 // Adds one triangle–voxel pair (lane l of `fields`: the fixed-point values of voxel_types.h's
@@ -516,7 +438,7 @@ inline void vox_columns(GiVoxelGrid grid, uint first, uint total, global const f
     if (!GI_ANY(advance)) break;
     t = GI_SEL(t, next, advance);
   }
-  *t0 = vox_lane_max(convert_intV(t));
+  *t0 = lane_max_int(convert_intV(t));
   intV j = convert_intV(column - GI_GATHER(uintV, columnStart, t));
   global const uint* setupU = (global const uint*)setup;
   uintV loP, hiP, lodBits, unused;
@@ -566,7 +488,7 @@ inline void vox_columns(GiVoxelGrid grid, uint first, uint total, global const f
     k1 = GI_SEL(k1, min(k1, convert_intV(floor(kmax + GI_VOX_GROW)) + 1), plane);
   }
   intV steps = GI_SEL((intV)(0), max(k1 - k0 + 1, 0), valid);
-  int maxSteps = vox_lane_max(steps);
+  int maxSteps = lane_max_int(steps);
   if (maxSteps == 0) return;
 
   // Per-lane triangle attributes, read once per column.
@@ -600,9 +522,9 @@ inline void vox_columns(GiVoxelGrid grid, uint first, uint total, global const f
   floatV lod = as_floatV(lodBits);
   intV hasBase = baseTex >= 0, hasMr = mrTex >= 0, hasEm = emTex >= 0;
   GiTexLevelV baseLevel, mrLevel, emLevel;
-  if (GI_ANY(hasBase)) baseLevel = vox_texture_levelV(textures, baseTex, lod);
-  if (GI_ANY(hasMr)) mrLevel = vox_texture_levelV(textures, mrTex, lod);
-  if (GI_ANY(hasEm)) emLevel = vox_texture_levelV(textures, emTex, lod);
+  if (GI_ANY(hasBase)) baseLevel = texture_levelV(textures, baseTex, lod);
+  if (GI_ANY(hasMr)) mrLevel = texture_levelV(textures, mrTex, lod);
+  if (GI_ANY(hasEm)) emLevel = texture_levelV(textures, emTex, lod);
   float h = 0.5f * (1.0f + GI_VOX_GROW);
 
   for (int s = 0; s < maxSteps; ++s) {
@@ -622,7 +544,7 @@ inline void vox_columns(GiVoxelGrid grid, uint first, uint total, global const f
     floatV cr = baseR, cg = baseG, cb = baseB, ca = baseA;
     intV sampleBase = hit & hasBase;
     if (GI_ANY(sampleBase)) {
-      GiVoxFloat4V tx = vox_sample_levelV(texels, baseLevel, u, v);
+      float4V tx = sample_texture_levelV(texels, baseLevel, u, v);
       cr *= GI_SEL((floatV)(1.0f), tx.x, hasBase);
       cg *= GI_SEL((floatV)(1.0f), tx.y, hasBase);
       cb *= GI_SEL((floatV)(1.0f), tx.z, hasBase);
@@ -631,11 +553,11 @@ inline void vox_columns(GiVoxelGrid grid, uint first, uint total, global const f
     intV cut = masked & (ca < cutoff);
     intV kept = hit & !cut;
     floatV metallic = metallicF;
-    if (GI_ANY(kept & hasMr)) metallic = GI_SEL(metallic, metallic * vox_sample_levelV(texels, mrLevel, u, v).z, hasMr);
+    if (GI_ANY(kept & hasMr)) metallic = GI_SEL(metallic, metallic * sample_texture_levelV(texels, mrLevel, u, v).z, hasMr);
     metallic = clamp(metallic, 0.0f, 1.0f);
     float3V em = f3v(emR, emG, emB);
     if (GI_ANY(kept & hasEm & emits)) {
-      GiVoxFloat4V e = vox_sample_levelV(texels, emLevel, u, v);
+      float4V e = sample_texture_levelV(texels, emLevel, u, v);
       em = selV(em, f3v(emR * e.x, emG * e.y, emB * e.z), hasEm);
     }
     em = f3v(fmin(em.x, GI_VOX_EMISSION_MAX), fmin(em.y, GI_VOX_EMISSION_MAX), fmin(em.z, GI_VOX_EMISSION_MAX));
