@@ -7,23 +7,6 @@
 #include "common/texture.h"
 #include "common/vector_width.h"
 
-typedef struct {
-  floatV x, y, z, w;
-} float4V;
-
-// The largest of the lanes' values.
-inline int lane_max_int(intV v) {
-#if GI_VW == 1
-  return v;
-#else
-  int lv[GI_VW];
-  vstoreV(v, 0, lv);
-  int m = lv[0];
-  for (int l = 1; l < GI_VW; ++l) m = max(m, lv[l]);
-  return m;
-#endif
-}
-
 // One mip level of a texture per lane: sample_texture()'s level choice. Every lane steps up to the
 // largest level among the lanes.
 typedef struct {

@@ -198,6 +198,23 @@ typedef struct {
   floatV x, y, z;
 } float3V;
 
+typedef struct {
+  floatV x, y, z, w;
+} float4V;
+
+// The largest of the lanes' values.
+inline int lane_max_int(intV v) {
+#if GI_VW == 1
+  return v;
+#else
+  int lv[GI_VW];
+  vstoreV(v, 0, lv);
+  int m = lv[0];
+  for (int l = 1; l < GI_VW; ++l) m = max(m, lv[l]);
+  return m;
+#endif
+}
+
 inline float3V f3v(floatV x, floatV y, floatV z) {
   float3V r;
   r.x = x;
