@@ -220,24 +220,27 @@ TEST(LpvKernels, GeometryVolumeMatchesHost) {
   EXPECT_LT(err, 1e-5);
 }
 
-// A random grid (SH coefficients of either sign) and geometry volume for the propagation tests.
-lpvref::Grid randomGrid(uint32_t seed) {
+// A random n³ grid (SH coefficients of either sign) with 2 cascades for the propagation and lookup tests.
+lpvref::Grid randomGrid(uint32_t seed, int n = kN) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), pos(0.0f, 1.0f);
-  lpvref::Grid g(kN, 2);
+  lpvref::Grid g(n, 2);
   for (glm::vec4& c : g.c) c = glm::vec4(pos(rng), 0.5f * u(rng), 0.5f * u(rng), 0.5f * u(rng));
   return g;
 }
 
-TEST(LpvKernels, PropagationMatchesHost) {
+// 3 steps with blocking on an n³ grid of 2 cascades against the host mirror. n = 8: 8 cells of a
+// row per work-item; n = 16: 16 where the device's native width is 16 (AVX-512: the propagation
+// then loads the face factors through lpv.cl's lpv_load_factor conversion).
+void propagationMatchesHost(int n) {
   cl::Context& ctx = test::context();
-  lpvref::Grid g = randomGrid(3);
+  lpvref::Grid g = randomGrid(3, n);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.0f, 0.4f);
-  std::vector<glm::vec4> geometry(2 * size_t(kN + 1) * (kN + 1) * (kN + 1));
+  std::vector<glm::vec4> geometry(2 * size_t(n + 1) * (n + 1) * (n + 1));
   for (glm::vec4& c : geometry) c = lpvref::lobe(randomUnit(rng)) * u(rng);
-  LpvVolume v(ctx, kN, 2);
-  v.begin(kTwoCascades, 1.0f);
+  LpvVolume v(ctx, n, 2);
+  v.begin({{glm::vec3(0.0f), 1.0f / n}, {glm::vec3(-0.5f), 2.0f / n}}, 1.0f);
   v.resolve(false);
   v.setGeometry(geometry);
   v.setInjected(g.c);
@@ -250,7 +253,8 @@ TEST(LpvKernels, PropagationMatchesHost) {
   }
   double errStep = relativeMaxError(v.readCurrent(), cur.c);
   double errAcc = relativeMaxError(v.readAccumulated(), acc.c);
-  std::printf("propagation, 3 steps with blocking: max error %.2e (last step), %.2e (accumulated)\n", errStep, errAcc);
+  std::printf("propagation, %d^3, 3 steps with blocking: max error %.2e (last step), %.2e (accumulated)\n", n,
+              errStep, errAcc);
   // Both sides round each face factor T_f to half precision (lpv_face_factors, lpvref::propagate),
   // from float values that differ in their last bits (fused multiply-adds on the device): where
   // the two lie on either side of a half rounding boundary (about 2e-4 of the factors: a float
@@ -261,6 +265,9 @@ TEST(LpvKernels, PropagationMatchesHost) {
   EXPECT_LT(errStep, 2e-4);
   EXPECT_LT(errAcc, 2e-4);
 }
+
+TEST(LpvKernels, PropagationMatchesHost) { propagationMatchesHost(kN); }
+TEST(LpvKernels, PropagationMatchesHost16) { propagationMatchesHost(16); }
 
 // The lookup from a buffer (the kernel interpolates) or from a 3D image (the sampler does; PoCL
 // in software with float weights, so the same bound holds; GPU samplers use 8-bit fractional

@@ -540,17 +540,36 @@ kernel void lpv_face_factors(global const half* faceGeometry, global half* faceF
   }
 }
 
+// The 16 half-precision face factors of one plane of a work-item as float16. Where the target has
+// AVX-512 this is one conversion instruction (vcvtph2ps zmm) through clang's storage-only __fp16;
+// PoCL's vload_half16 converts two halves of 8 and joins them (3 instructions; without
+// cl_khr_fp16 a half vector cannot be loaded as such). Same values either way.
+#if LPV_LANES == 16 && defined(__AVX512F__)
+typedef __fp16 lpv_half16 __attribute__((ext_vector_type(16), aligned(2)));
+inline float16 lpv_load_factor(global const half* p) {
+  return __builtin_convertvector(*(global const lpv_half16*)p, float16);
+}
+#else
+inline floatL lpv_load_factor(global const half* p) { return vload_halfL(0, p); }
+#endif
+
+// Prefetch of one cache line for reading (PoCL on x86: the pointer is a plain address there); a
+// no-op elsewhere.
+#if defined(__x86_64__)
+#define LPV_PREFETCH(p) __builtin_prefetch((const void*)(size_t)(p), 0, 3)
+#else
+#define LPV_PREFETCH(p)
+#endif
+
 // Adds the light channel `in` (4 coefficients, grid units) of the neighbour in direction `dir`
 // sends through the destination's 5 faces: face fluxes T_f · max(0, I(ω_f)) into o[0] (sum of the
 // fluxes) and o[1..3] (signed along the re-emission axis), scaled by the lobe constants at the end.
 // In grid units I(d) = in0 + s·√5·in_a on the main face and I(normalize(2d ± e_b)) = in0 + 2s·in_a
-// ± in_b on the side faces. With blocking the 30 factors live in memory (they do not fit in
-// registers) and each is read once, as the operand of one multiply; without, they are two
-// constants in registers and the fluxes go into the sums by fused multiply-adds (with blocking
-// that form was 5-10 % slower: its factors are read twice, and it spilled more). Either way the
-// direction's 5 fluxes are summed first and added to o[0] once, so that o[0] is not one chain of
-// 30 dependent operations per channel.
-inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, const bool blocking) {
+// ± in_b on the side faces. The fluxes go into the sums by fused multiply-adds, each factor used
+// twice (for o[0] and for its axis): 11 operations after the 11 that form the clamped
+// intensities, against 15 with the products formed first. The direction's 5 fluxes are summed
+// first and added to o[0] once, so that o[0] is not one chain of 30 dependent operations per channel.
+inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
   int a = dir / 2;
   float s = dir % 2 ? -1.0f : 1.0f;
   int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
@@ -558,32 +577,23 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o, con
   floatL side = fma(in[LPV_COEF(a)], (floatL)(2.0f * s), in[0]);
   floatL f1p = fmax(side + in[LPV_COEF(b1)], 0.0f), f1m = fmax(side - in[LPV_COEF(b1)], 0.0f);
   floatL f2p = fmax(side + in[LPV_COEF(b2)], 0.0f), f2m = fmax(side - in[LPV_COEF(b2)], 0.0f);
-  if (blocking) {
-    fMain *= t[0];
-    f1p *= t[1];
-    f1m *= t[2];
-    f2p *= t[3];
-    f2m *= t[4];
-    o[0] += (fMain + f1p) + (f1m + f2p) + f2m;
-    o[LPV_COEF(a)] += s > 0.0f ? fMain : -fMain;
-    o[LPV_COEF(b1)] += f1p - f1m;
-    o[LPV_COEF(b2)] += f2p - f2m;
-  } else {
-    o[0] += fma(f2m, t[4], fma(f2p, t[3], fma(f1m, t[2], fma(f1p, t[1], fMain * t[0]))));
-    o[LPV_COEF(a)] = fma(s > 0.0f ? fMain : -fMain, t[0], o[LPV_COEF(a)]);
-    o[LPV_COEF(b1)] = fma(-f1m, t[2], fma(f1p, t[1], o[LPV_COEF(b1)]));
-    o[LPV_COEF(b2)] = fma(-f2m, t[4], fma(f2p, t[3], o[LPV_COEF(b2)]));
-  }
+  o[0] += fma(f2m, t[4], fma(f2p, t[3], fma(f1m, t[2], fma(f1p, t[1], fMain * t[0]))));
+  o[LPV_COEF(a)] = fma(s > 0.0f ? fMain : -fMain, t[0], o[LPV_COEF(a)]);
+  o[LPV_COEF(b1)] = fma(-f1m, t[2], fma(f1p, t[1], o[LPV_COEF(b1)]));
+  o[LPV_COEF(b2)] = fma(-f2m, t[4], fma(f2p, t[3], o[LPV_COEF(b2)]));
 }
 
 // One gather step of cascade k. Work-item = LPV_LANES destination cells of a row (global
-// (N / LPV_LANES, N, N)). The 30 face transmittances T_f first (read from lpv_face_factors'
-// planes; they stay in private memory), then channel after channel, so that only 4 accumulators
-// and one neighbour's 4 coefficients are live (16 float16 would not fit AVX2's registers). Two
-// kernels from one body: `lpv_propagate_blocked` reads the face factors, `lpv_propagate_open` uses the
-// unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the surfaces that lit them — or
-// occlusion off) without loading or computing any factor; the blocking is a compile-time constant
-// in each, so neither carries the other's work.
+// (N / LPV_LANES, N, N)). Direction after direction: its 5 face transmittances T_f (read from
+// lpv_face_factors' planes), then the neighbour's 4 coefficients of each channel into that
+// channel's 4 accumulators. The 12 accumulators, 5 factors and one neighbour channel fit in
+// AVX-512's 32 vector registers, so each factor is loaded once and nothing spills; with all 30
+// factors loaded first and the channels outer (the order before, for AVX2's 16 registers) 14 of
+// them spilled: 1946 against 1742 instructions per work-group of 2 work-items, 234 against 116
+// stack accesses. Two kernels from one body: `lpv_propagate_blocked` reads the face factors,
+// `lpv_propagate_open` uses the unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the
+// surfaces that lit them — or occlusion off) without loading or computing any factor; the
+// blocking is a compile-time constant in each, so neither carries the other's work.
 // The accumulated grid is updated every other step (half its memory traffic), by the flags in
 // `accumulate`: LPV_ADD_THIS adds this step's result, LPV_ADD_SOURCE the source grid (the previous
 // step's result, which that step left out); none leaves this step's result to the next step.
@@ -601,39 +611,46 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
   const int stride[3] = {1, LPV_ROW, LPV_SLICE};
   floatL maxMain[6], maxSide[6];  // the open step's factors
   if (!blocking) lpv_open_factors(x0, maxMain, maxSide);
-  floatL t[6][5];
+  // The source row a work-item touches first is its z + 1 neighbour row: its loads waited on
+  // memory (17 % of the blocked step's samples). Prefetched here for the next work-group (y + 1),
+  // one line per plane: −13 % CPU time (docs/PERFORMANCE.md).
+#pragma unroll
+  for (int p = 0; p < 12; ++p) LPV_PREFETCH(src + row + LPV_SLICE + LPV_ROW + p * LPV_N);
+  floatL o[3][4];
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch) o[ch][0] = o[ch][1] = o[ch][2] = o[ch][3] = (floatL)(0.0f);
 #pragma unroll
   for (int dir = 0; dir < 6; ++dir) {
+    if (!inside[dir]) continue;  // whole row outside (y, z neighbours)
+    floatL t[5];
     if (blocking) {
       global const half* factors = faceFactors + LPV_PAD + LPV_FACTOR_AT(k, dir * 5, x0, y, z);
 #pragma unroll
-      for (int f = 0; f < 5; ++f) t[dir][f] = vload_halfL(0, factors + f * LPV_N);
+      for (int f = 0; f < 5; ++f) t[f] = lpv_load_factor(factors + f * LPV_N);
     } else {
-      t[dir][0] = maxMain[dir];
-      t[dir][1] = t[dir][2] = t[dir][3] = t[dir][4] = maxSide[dir];
+      t[0] = maxMain[dir];
+      t[1] = t[2] = t[3] = t[4] = maxSide[dir];
+    }
+    // x neighbours past the row are the neighbouring plane's cell or padding: factor 0 there.
+    int nb = -(dir % 2 ? -1 : 1) * stride[dir / 2];
+#pragma unroll
+    for (int ch = 0; ch < 3; ++ch) {
+      floatL in[4];
+#pragma unroll
+      for (int q = 0; q < 4; ++q) in[q] = vloadL(0, src + row + ch * 4 * LPV_N + q * LPV_N + nb);
+      lpv_faces(dir, in, t, o[ch]);
     }
   }
 #pragma unroll
   for (int ch = 0; ch < 3; ++ch) {
     size_t planes = row + ch * 4 * LPV_N;
-    floatL o[4] = {(floatL)(0.0f), (floatL)(0.0f), (floatL)(0.0f), (floatL)(0.0f)};
-#pragma unroll
-    for (int dir = 0; dir < 6; ++dir) {
-      if (!inside[dir]) continue;  // whole row outside (y, z neighbours)
-      // x neighbours past the row are the neighbouring plane's cell or padding: factor 0 there.
-      int nb = -(dir % 2 ? -1 : 1) * stride[dir / 2];
-      floatL in[4];
-#pragma unroll
-      for (int q = 0; q < 4; ++q) in[q] = vloadL(0, src + planes + q * LPV_N + nb);
-      lpv_faces(dir, in, t[dir], o, blocking);
-    }
     const float lobe[4] = {GI_SH_LOBE0 * LPV_UNIT0, GI_SH_LOBE1 * LPV_UNIT1, GI_SH_LOBE1 * LPV_UNIT1,
                            GI_SH_LOBE1 * LPV_UNIT1};  // re-emitted cosine lobes, in grid units
     floatL total[4];
 #pragma unroll
     for (int q = 0; q < 4; ++q) {
       size_t at = planes + q * LPV_N;
-      floatL out = lobe[q] * o[q];
+      floatL out = lobe[q] * o[ch][q];
       vstoreL(out, 0, dst + at);
       if (accumulate & LPV_ADD_THIS) {
         floatL sum = accumulate & LPV_ADD_SOURCE ? vloadL(0, src + at) + out : out;
