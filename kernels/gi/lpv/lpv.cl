@@ -590,7 +590,8 @@ inline void lpv_faces(int dir, const floatL* in, const floatL* t, floatL* o) {
 // AVX-512's 32 vector registers, so each factor is loaded once and nothing spills; with all 30
 // factors loaded first and the channels outer (the order before, for AVX2's 16 registers) 14 of
 // them spilled: 1946 against 1742 instructions per work-group of 2 work-items, 234 against 116
-// stack accesses. Two kernels from one body: `lpv_propagate_blocked` reads the face factors,
+// stack accesses. (With AVX2's 16 registers the 12 accumulators spill instead; there the two orders
+// compiled to about the same count, 1311 against 1289, in an earlier form of the step.) Two kernels from one body: `lpv_propagate_blocked` reads the face factors,
 // `lpv_propagate_open` uses the unblocked T_f = ΔΩ_f/π (first step — the VPLs sit next to the
 // surfaces that lit them — or occlusion off) without loading or computing any factor; the
 // blocking is a compile-time constant in each, so neither carries the other's work.
