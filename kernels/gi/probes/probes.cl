@@ -237,12 +237,15 @@ kernel void probe_relocate(GiProbeGrid grid, global const float4* rayDirs, globa
 
 // probe_field_irradiance() for GI_VW pixels at once, lanes as floatV (PERFORMANCE_FACTS.md 2:
 // a per-pixel loop over the 8 probes would run as scalar code). The formulas are those of
-// probe_field.h, written lane-wise. What bounds this kernel on a CPU is the per-lane loads of map
-// texels (8 probes × 8 bilinear taps per pixel), so each load fetches a whole record: one 128-bit
-// load per irradiance tap (rgb + unused w), one per row of two adjacent distance taps
-// (mean, mean², mean, mean²) and one for the probe's state: 7 loads per probe instead of 20
-// scalar gathers. The octahedral footprint of the normal is the same for the 8 probes and is
-// computed once.
+// probe_field.h, written lane-wise. On a CPU (GI_VW > 1) the lanes' map reads are what costs:
+// a per-lane record load and its transposition into lanes take ≈ 60 instructions per bilinear
+// tap for 16 lanes. But a work-item's adjacent pixels share most of what they read: usually one
+// probe cell (the same 8 probes), and per probe a few distance texels and, for the normal, a few
+// irradiance texels. So the lanes are taken in passes: one per different cell among them, and
+// within it one per different footprint, each reading its texels once as scalars broadcast into
+// the lanes' multiply-adds (the lanes not in the pass discard the result). The footprint of the
+// normal is the same for the 8 probes and is computed once. With one pixel per work-item
+// (GI_VW = 1, GPUs) every read is the pixel's own.
 __attribute__((always_inline)) inline void probe_octahedral_footprintV(floatV dx, floatV dy, floatV dz, int res, intV* offset, floatV* tx,
                                         floatV* ty) {
   floatV inv = 1.0f / (fabs(dx) + fabs(dy) + fabs(dz));
@@ -262,25 +265,77 @@ __attribute__((always_inline)) inline void probe_octahedral_footprintV(floatV dx
   *offset = y0 * (res + 2) + x0;
 }
 
-// Bilinear irradiance of float4 texels i00, i00 + 1, i00 + side, i00 + side + 1.
-__attribute__((always_inline)) inline float3V probe_irradiance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty) {
-  floatV ar, ag, ab, br, bg, bb, cr, cg, cb, dr, dg, db, unused;
-  GI_GATHER_AOS4(float, map, i00, ar, ag, ab, unused)
-  GI_GATHER_AOS4(float, map, i00 + 1, br, bg, bb, unused)
-  GI_GATHER_AOS4(float, map, i00 + side, cr, cg, cb, unused)
-  GI_GATHER_AOS4(float, map, i00 + side + 1, dr, dg, db, unused)
-  return f3v(mix(mix(ar, br, tx), mix(cr, dr, tx), ty), mix(mix(ag, bg, tx), mix(cg, dg, tx), ty),
-             mix(mix(ab, bb, tx), mix(cb, db, tx), ty));
+// Bilinear weights of the taps (x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1) for the
+// fractions (tx, ty): a bilinear lookup is then one multiply-add per tap and channel (with the
+// same texel for all lanes, a scalar from memory broadcast into the multiply-add).
+typedef struct {
+  floatV w00, w10, w01, w11;
+} ProbeBilinearV;
+
+__attribute__((always_inline)) inline ProbeBilinearV probe_bilinear_weightsV(floatV tx, floatV ty) {
+  ProbeBilinearV q;
+  floatV sx = 1.0f - tx, sy = 1.0f - ty;
+  q.w00 = sx * sy;
+  q.w10 = tx * sy;
+  q.w01 = sx * ty;
+  q.w11 = tx * ty;
+  return q;
 }
 
-// Bilinear (mean, mean²) of float2 texels i00 … i00 + side + 1: a row's two taps are one record.
-__attribute__((always_inline)) inline void probe_distance_bilerpV(global const float* map, intV i00, int side, floatV tx, floatV ty, floatV* mean,
-                                   floatV* mean2) {
+#if GI_VW > 1
+// The smallest of the lanes' values.
+inline int probe_lane_min(intV v) {
+#if GI_VW == 16
+  int8 a = min(v.lo, v.hi);
+  int4 b = min(a.lo, a.hi);
+#else
+  int4 b = min(v.lo, v.hi);
+#endif
+  int2 c = min(b.lo, b.hi);
+  return min(c.x, c.y);
+}
+
+// Whether any lane of a comparison result (−1 or 0 per lane) is set, through the minimum: PoCL
+// turns any() and all() of 16 lanes into a chain of per-lane tests and branches.
+inline int probe_any(intV m) { return probe_lane_min(m) < 0; }
+
+// Bilinear (mean, mean²) of one probe's distance map (float2 texels) at the lanes' footprints
+// i00 with weights q, for the lanes set in `lanes`. The directions from one probe to a
+// work-item's adjacent pixels usually fall in one or two texels (a distance texel spans 2/res of
+// the octahedron; Sponza 640×360: 1.9 different footprints among 16 lanes on average): one pass
+// per different footprint (smallest index first), its four records read as scalars.
+__attribute__((always_inline)) inline void probe_distance_sharedV(global const float* map, intV i00, intV lanes,
+                                                                  int side, ProbeBilinearV q, floatV* mean,
+                                                                  floatV* mean2) {
+  floatV m = (floatV)(0.0f), m2 = m;
+  for (intV pending = lanes; probe_any(pending);) {
+    int o = probe_lane_min(GI_SEL((intV)(INT_MAX), i00, pending));
+    intV these = i00 == o;
+    global const float* t = map + 2 * o;
+    m = GI_SEL(m, q.w00 * t[0] + q.w10 * t[2] + q.w01 * t[2 * side] + q.w11 * t[2 * side + 2], these);
+    m2 = GI_SEL(m2, q.w00 * t[1] + q.w10 * t[3] + q.w01 * t[2 * side + 1] + q.w11 * t[2 * side + 3], these);
+    pending &= ~these;
+  }
+  *mean = m;
+  *mean2 = m2;
+}
+#else
+// One pixel per work-item: the distance map's four taps at texel offset i00 (a row's two taps
+// one 128-bit record).
+__attribute__((always_inline)) inline void probe_distance_pixelV(global const float* map, intV i00, int side,
+                                                                 ProbeBilinearV q, floatV* mean, floatV* mean2) {
   floatV am, am2, bm, bm2, cm, cm2, dm, dm2;
   GI_GATHER_SPAN4(float, map, i00 * 2, am, am2, bm, bm2)
   GI_GATHER_SPAN4(float, map, (i00 + side) * 2, cm, cm2, dm, dm2)
-  *mean = mix(mix(am, bm, tx), mix(cm, dm, tx), ty);
-  *mean2 = mix(mix(am2, bm2, tx), mix(cm2, dm2, tx), ty);
+  *mean = q.w00 * am + q.w10 * bm + q.w01 * cm + q.w11 * dm;
+  *mean2 = q.w00 * am2 + q.w10 * bm2 + q.w01 * cm2 + q.w11 * dm2;
+}
+#endif
+
+// Trilinear weight of corner c (bit 0: +x, bit 1: +y, bit 2: +z) of a probe cell at fractions
+// (ax, ay, az).
+inline floatV probe_trilinearV(int c, floatV ax, floatV ay, floatV az) {
+  return ((c & 1) ? ax : 1.0f - ax) * ((c & 2) ? ay : 1.0f - ay) * ((c & 4) ? az : 1.0f - az);
 }
 
 // What the 8 probes of a pixel share: the biased point xb, the normal's irradiance footprint
@@ -288,20 +343,18 @@ __attribute__((always_inline)) inline void probe_distance_bilerpV(global const f
 typedef struct {
   float3V x, n, xb;
   intV irrOffset;
-  floatV itx, ity;
+  ProbeBilinearV irrTaps;
   floatV Ex, Ey, Ez, wsum;
 } ProbeBlendV;
 
-// Adds one probe's weighted irradiance: trilinear weight w (times the probe's active flag), the
-// probe's relocated position pp, its irradiance map irrMap with the lanes' texel indices irrIndex
-// (the normal's footprint) and its distance map distMap with the lanes' texel offsets distBase
-// added to the direction's footprint. The uniform-cell path passes one probe's maps with shared
-// lane indices, the general path the map arrays with per-lane probe offsets.
-__attribute__((always_inline)) inline void probe_accumulateV(const GiProbeGrid* g, ProbeBlendV* b, floatV w,
-                                                              floatV ppx, floatV ppy, floatV ppz,
-                                                              global const float* irrMap, intV irrIndex,
-                                                              global const float* distMap, intV distBase) {
-  int dres = g->distance_res, dside = dres + 2, iside = g->irradiance_res + 2;
+// The weight of one probe: trilinear weight w (times the probe's active flag) × backface term ×
+// Chebyshev visibility from the probe's relocated position pp and its distance map distMap (for
+// the lanes set in `lanes`; one pixel per work-item: the whole map array, the probe's map at
+// texel offset distBase).
+__attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g, const ProbeBlendV* b, floatV w,
+                                                           floatV ppx, floatV ppy, floatV ppz,
+                                                           global const float* distMap, intV distBase, intV lanes) {
+  int dres = g->distance_res, dside = dres + 2;
   floatV tpx = ppx - b->x.x, tpy = ppy - b->x.y, tpz = ppz - b->x.z;
   floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
   w *= GI_SEL((floatV)(1.0f), fmax(g->backface_floor, (b->n.x * tpx + b->n.y * tpy + b->n.z * tpz) / len),
@@ -313,18 +366,128 @@ __attribute__((always_inline)) inline void probe_accumulateV(const GiProbeGrid* 
   floatV dtx, dty, mean, mean2;
   probe_octahedral_footprintV(GI_SEL(b->n.x, fpx, far), GI_SEL(b->n.y, fpy, far), GI_SEL(b->n.z, fpz, far), dres,
                               &distOffset, &dtx, &dty);
-  probe_distance_bilerpV(distMap, distBase + distOffset, dside, dtx, dty, &mean, &mean2);
+  ProbeBilinearV q = probe_bilinear_weightsV(dtx, dty);
+#if GI_VW > 1
+  probe_distance_sharedV(distMap, distBase + distOffset, lanes, dside, q, &mean, &mean2);
+#else
+  probe_distance_pixelV(distMap, distBase + distOffset, dside, q, &mean, &mean2);
+#endif
   floatV variance = fabs(mean2 - mean * mean), d = r - mean;
   floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
 #pragma unroll
   for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
-  w *= GI_SEL((floatV)(1.0f), v, r > mean);
-  float3V e = probe_irradiance_bilerpV(irrMap, irrIndex, iside, b->itx, b->ity);
-  b->Ex += w * e.x;
-  b->Ey += w * e.y;
-  b->Ez += w * e.z;
-  b->wsum += w;
+  return w * GI_SEL((floatV)(1.0f), v, r > mean);
 }
+
+#if GI_VW > 1
+// Σ_c weight[c] · (bilinear irradiance of probe c's map at the lanes' footprint), for the 8 maps
+// irrMaps[c], all lanes reading the same texel offset o: scalar taps broadcast into multiply-adds.
+__attribute__((always_inline)) inline float3V probe_irradiance_sharedV(global const float* const* irrMaps, int o,
+                                                                       int side, ProbeBilinearV q,
+                                                                       const floatV* weight) {
+  floatV zero = (floatV)(0.0f), ex = zero, ey = zero, ez = zero;
+#pragma unroll
+  for (int c = 0; c < 8; ++c) {
+    global const float* t = irrMaps[c] + 4 * o;
+    floatV a = weight[c] * q.w00, bb = weight[c] * q.w10, cc = weight[c] * q.w01, d = weight[c] * q.w11;
+    ex += a * t[0] + bb * t[4] + cc * t[4 * side] + d * t[4 * side + 4];
+    ey += a * t[1] + bb * t[5] + cc * t[4 * side + 1] + d * t[4 * side + 5];
+    ez += a * t[2] + bb * t[6] + cc * t[4 * side + 2] + d * t[4 * side + 6];
+  }
+  return f3v(ex, ey, ez);
+}
+
+// The 8 probes of cell `cell` for the lanes set in `lanes` (the others get meaningless values):
+// scalar probe states and positions broadcast; first the 8 weights, then the irradiance. The
+// normal's irradiance footprint is the same for the 8 probes; a work-item's normals fall in 4
+// different footprints on average (Sponza 640×360, 16 lanes: normal maps spread them; an
+// irradiance texel spans 2/res of the octahedron), each one pass of scalar taps broadcast into
+// its lanes' multiply-adds (16 instructions per probe), which costs less than per-lane records
+// and their transposition (≈ 60 instructions per tap and probe) even at 8 passes. Sets b's sums.
+__attribute__((always_inline)) inline void probe_cell_sharedV(const GiProbeGrid* g, ProbeBlendV* b, intV lanes,
+                                                               global const float* irradiance,
+                                                               global const float* distance,
+                                                               global const float* probeStates, int cell,
+                                                               floatV ax, floatV ay, floatV az) {
+  int cx = g->count[0], cy = g->count[1], cz = g->count[2];
+  int ux = cell % cx, uy = (cell / cx) % cy, uz = cell / (cx * cy);
+  float sx = g->spacing[0], sy = g->spacing[1], sz = g->spacing[2];
+  float ox = g->origin[0], oy = g->origin[1], oz = g->origin[2];
+  int iside = g->irradiance_res + 2, dside = g->distance_res + 2;
+  int irrTexels = iside * iside, distTexels = dside * dside;
+  floatV weight[8];
+  global const float* irrMaps[8];
+  b->wsum = (floatV)(0.0f);
+#pragma unroll
+  for (int c = 0; c < 8; ++c) {
+    int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
+    floatV w = probe_trilinearV(c, ax, ay, az);
+    int pix = min(ux + offx, cx - 1), piy = min(uy + offy, cy - 1), piz = min(uz + offz, cz - 1);
+    int probe = (piz * cy + piy) * cx + pix;
+    float4 state = vload4(probe, probeStates);  // relocation offset, active flag
+    w *= state.w;
+    weight[c] = probe_weightV(g, b, w, (floatV)(ox + (float)pix * sx + state.x), (floatV)(oy + (float)piy * sy + state.y),
+                              (floatV)(oz + (float)piz * sz + state.z), distance + (size_t)probe * distTexels * 2,
+                              (intV)(0), lanes);
+    b->wsum += weight[c];
+    irrMaps[c] = irradiance + (size_t)probe * irrTexels * 4;
+  }
+  float3V e = f3v((floatV)(0.0f), (floatV)(0.0f), (floatV)(0.0f));
+  for (intV pending = lanes; probe_any(pending);) {
+    int o = probe_lane_min(GI_SEL((intV)(INT_MAX), b->irrOffset, pending));
+    intV these = b->irrOffset == o;
+    e = selV(e, probe_irradiance_sharedV(irrMaps, o, iside, b->irrTaps, weight), these);
+    pending &= ~these;
+  }
+  b->Ex = e.x;
+  b->Ey = e.y;
+  b->Ez = e.z;
+}
+#else
+// One pixel per work-item: weight × the bilinear irradiance of the map at texel offset i00.
+__attribute__((always_inline)) inline float3V probe_irradiance_pixelV(global const float* map, intV i00, int side,
+                                                                      ProbeBilinearV q, floatV weight) {
+  floatV ar, ag, ab, br, bg, bb, cr, cg, cb, dr, dg, db, unused;
+  GI_GATHER_AOS4(float, map, i00, ar, ag, ab, unused)
+  GI_GATHER_AOS4(float, map, i00 + 1, br, bg, bb, unused)
+  GI_GATHER_AOS4(float, map, i00 + side, cr, cg, cb, unused)
+  GI_GATHER_AOS4(float, map, i00 + side + 1, dr, dg, db, unused)
+  floatV a = weight * q.w00, b = weight * q.w10, c = weight * q.w01, d = weight * q.w11;
+  return f3v(a * ar + b * br + c * cr + d * dr, a * ag + b * bg + c * cg + d * dg, a * ab + b * bb + c * cb + d * db);
+}
+
+// One pixel per work-item: the 8 probes of its cell (bx, by, bz). Sets b's sums.
+__attribute__((always_inline)) inline void probe_cell_pixelV(const GiProbeGrid* g, ProbeBlendV* b,
+                                                              global const float* irradiance,
+                                                              global const float* distance,
+                                                              global const float* probeStates, intV bx, intV by,
+                                                              intV bz, floatV ax, floatV ay, floatV az) {
+  int cx = g->count[0], cy = g->count[1], cz = g->count[2];
+  float sx = g->spacing[0], sy = g->spacing[1], sz = g->spacing[2];
+  float ox = g->origin[0], oy = g->origin[1], oz = g->origin[2];
+  int iside = g->irradiance_res + 2, dside = g->distance_res + 2;
+  int irrTexels = iside * iside, distTexels = dside * dside;
+  floatV zero = (floatV)(0.0f);
+  b->Ex = b->Ey = b->Ez = b->wsum = zero;
+#pragma unroll
+  for (int c = 0; c < 8; ++c) {
+    int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
+    floatV w = probe_trilinearV(c, ax, ay, az);
+    intV pix = min(bx + offx, cx - 1), piy = min(by + offy, cy - 1), piz = min(bz + offz, cz - 1);
+    intV probe = (piz * cy + piy) * cx + pix;
+    floatV movedX, movedY, movedZ, active;  // the probe's state: relocation offset, active flag
+    GI_GATHER_AOS4(float, probeStates, probe, movedX, movedY, movedZ, active)
+    w *= active;
+    w = probe_weightV(g, b, w, ox + convert_floatV(pix) * sx + movedX, oy + convert_floatV(piy) * sy + movedY,
+                      oz + convert_floatV(piz) * sz + movedZ, distance, probe * distTexels, (intV)(-1));
+    b->wsum += w;
+    float3V e = probe_irradiance_pixelV(irradiance, probe * irrTexels + b->irrOffset, iside, b->irrTaps, w);
+    b->Ex += e.x;
+    b->Ey += e.y;
+    b->Ez += e.z;
+  }
+}
+#endif
 
 __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiProbeGrid* g, global const float* irradiance,
                                        global const float* distance, global const float* probeStates, float3V x,
@@ -343,47 +506,31 @@ __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiPr
   intV bz = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rz), rz == rz)), 0, max(cz - 2, 0));
   floatV ax = clamp(rx - convert_floatV(bx), 0.0f, 1.0f), ay = clamp(ry - convert_floatV(by), 0.0f, 1.0f),
          az = clamp(rz - convert_floatV(bz), 0.0f, 1.0f);
-  int ires = g->irradiance_res, iside = ires + 2, dside = g->distance_res + 2;
-  int irrTexels = iside * iside, distTexels = dside * dside;
-  probe_octahedral_footprintV(n.x, n.y, n.z, ires, &b.irrOffset, &b.itx, &b.ity);
+  floatV itx, ity;
+  probe_octahedral_footprintV(n.x, n.y, n.z, g->irradiance_res, &b.irrOffset, &itx, &ity);
+  b.irrTaps = probe_bilinear_weightsV(itx, ity);
   floatV zero = (floatV)(0.0f);
-  b.Ex = b.Ey = b.Ez = b.wsum = zero;
 #if GI_VW > 1
-  // Most work-items' pixels lie in one probe cell (adjacent pixels of a row): then the 8 probes,
-  // their states and positions are the same for all lanes (scalar loads, broadcast), and the
-  // irradiance taps of every probe are at the same lane offsets from that probe's map, whose lane
-  // indices are extracted once instead of once per probe. Same formulas, same results.
-  int ux = bx.s0, uy = by.s0, uz = bz.s0;
-  if (GI_ALL((bx == ux) & (by == uy) & (bz == uz))) {
-#pragma unroll
-    for (int c = 0; c < 8; ++c) {
-      int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
-      floatV w = (offx ? ax : 1.0f - ax) * (offy ? ay : 1.0f - ay) * (offz ? az : 1.0f - az);
-      int pix = min(ux + offx, cx - 1), piy = min(uy + offy, cy - 1), piz = min(uz + offz, cz - 1);
-      int probe = (piz * cy + piy) * cx + pix;
-      float4 state = vload4(probe, probeStates);  // relocation offset, active flag
-      w *= state.w;
-      probe_accumulateV(g, &b, w, (floatV)(ox + (float)pix * sx + state.x), (floatV)(oy + (float)piy * sy + state.y),
-                        (floatV)(oz + (float)piz * sz + state.z), irradiance + (size_t)probe * irrTexels * 4,
-                        b.irrOffset, distance + (size_t)probe * distTexels * 2, (intV)(0));
-    }
-  } else
-#endif
-  {
-#pragma unroll
-    for (int c = 0; c < 8; ++c) {
-      int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
-      floatV w = (offx ? ax : 1.0f - ax) * (offy ? ay : 1.0f - ay) * (offz ? az : 1.0f - az);
-      intV pix = min(bx + offx, cx - 1), piy = min(by + offy, cy - 1), piz = min(bz + offz, cz - 1);
-      intV probe = (piz * cy + piy) * cx + pix;
-      floatV movedX, movedY, movedZ, active;  // the probe's state: relocation offset, active flag
-      GI_GATHER_AOS4(float, probeStates, probe, movedX, movedY, movedZ, active)
-      w *= active;
-      probe_accumulateV(g, &b, w, ox + convert_floatV(pix) * sx + movedX, oy + convert_floatV(piy) * sy + movedY,
-                        oz + convert_floatV(piz) * sz + movedZ, irradiance, probe * irrTexels + b.irrOffset, distance,
-                        probe * distTexels);
-    }
+  // Most work-items' pixels lie in one probe cell (adjacent pixels; Sponza 640×360, 16 lanes: 1.3
+  // different cells on average): per cell among the lanes, its 8 probes, their states and
+  // positions are the same for all lanes (scalar loads, broadcast), and their map taps are read
+  // once per different footprint. One pass per cell, the other lanes' results discarded.
+  intV cell = (bz * cy + by) * cx + bx;
+  b.Ex = b.Ey = b.Ez = b.wsum = zero;
+  for (intV pending = (intV)(-1); probe_any(pending);) {
+    int next = probe_lane_min(GI_SEL((intV)(INT_MAX), cell, pending));
+    intV these = cell == next;
+    ProbeBlendV other = b;
+    probe_cell_sharedV(g, &other, these, irradiance, distance, probeStates, next, ax, ay, az);
+    b.Ex = GI_SEL(b.Ex, other.Ex, these);
+    b.Ey = GI_SEL(b.Ey, other.Ey, these);
+    b.Ez = GI_SEL(b.Ez, other.Ez, these);
+    b.wsum = GI_SEL(b.wsum, other.wsum, these);
+    pending &= ~these;
   }
+#else
+  probe_cell_pixelV(g, &b, irradiance, distance, probeStates, bx, by, bz, ax, ay, az);
+#endif
   floatV inv = GI_SEL(zero, 1.0f / b.wsum, b.wsum > 0.0f);
   return f3v(b.Ex * inv, b.Ey * inv, b.Ez * inv);
 }
