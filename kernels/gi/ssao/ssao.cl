@@ -174,7 +174,8 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
 // records: ssao_depth_planes(). position, normal and direct are read only with bleeding on.
 // The grid (gridWidth × gridHeight) is the camera image or, with GI_SSAO_DOWN = 2, the
 // half-resolution grid of ssao_depth_planes (depth, geoNormal and records per grid pixel; position,
-// normal and direct stay camera images of the given width). Outputs per grid pixel.
+// normal and direct stay camera images of the given width). Outputs per grid pixel; irradianceOut
+// only with bleeding on (left as it was otherwise).
 kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView camera, float4 projection,
                            global const float* depth, global const float4* geoNormal, global const uint2* records,
                            constant float4* kernelVectors, constant float2* rotations, float radius, float bias,
@@ -229,7 +230,8 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
   global const float* pos = (global const float*)position;
   global const float* nrm = (global const float*)normal;
   global const float* dir = (global const float*)direct;
-  floatV occluded = (floatV)(0.0f), Ex = (floatV)(0.0f), Ey = (floatV)(0.0f), Ez = (floatV)(0.0f);
+  intV occluded = (intV)(0);  // samples occluded
+  floatV Ex = (floatV)(0.0f), Ey = (floatV)(0.0f), Ez = (floatV)(0.0f);
 #pragma unroll
   for (int i = 0; i < GI_SSAO_SAMPLES; ++i) {
     float4 k = kernelVectors[i];
@@ -267,7 +269,7 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
     floatV e = Sz * invPlane - 1.0f, bA = bias * A;
     intV occ = ok & (e > 0.0f) & (e * e > bA * bA * (mx * mx + my * my + mz * mz)) &
                (fabs(1.0f - zP * A) < radius * A);
-    occluded += GI_SEL((floatV)(0.0f), (floatV)(1.0f), occ);
+    SSAO_COUNT(occluded, occ);
     if (bleeding && GI_ANY(occ)) {
 #if GI_SSAO_DOWN == 1
       intV q4 = q * 4;
@@ -288,13 +290,17 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
     }
   }
   // Background lanes ran with depth 0 (their samples may pass the tests): no occlusion, no light.
-  occluded = GI_SEL((floatV)(0.0f), occluded, surface);
-  ssao_store1(occlusionOut, i0, valid, occluded / (float)GI_SSAO_SAMPLES);
-  floatV zero = (floatV)(0.0f);
-  Ex = GI_SEL(zero, Ex, surface);
-  Ey = GI_SEL(zero, Ey, surface);
-  Ez = GI_SEL(zero, Ez, surface);
-  SSAO_STORE4(irradianceOut, i0, valid, Ex, Ey, Ez, zero)
+  ssao_store1(occlusionOut, i0, valid,
+              GI_SEL((floatV)(0.0f), convert_floatV(occluded) / (float)GI_SSAO_SAMPLES, surface));
+  // E only with bleeding on: the blur reads it only then, and 16 bytes per pixel written for
+  // nothing would also push the sampled records out of the L2 cache.
+  if (bleeding) {
+    floatV zero = (floatV)(0.0f);
+    Ex = GI_SEL(zero, Ex, surface);
+    Ey = GI_SEL(zero, Ey, surface);
+    Ez = GI_SEL(zero, Ez, surface);
+    SSAO_STORE4(irradianceOut, i0, valid, Ex, Ey, Ez, zero)
+  }
 }
 
 // The composition of GI_VW pixels from pixel i0 (valid of them in the image): stores the blurred
