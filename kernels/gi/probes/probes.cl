@@ -535,53 +535,68 @@ __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiPr
   return f3v(b.Ex * inv, b.Ey * inv, b.Ez * inv);
 }
 
+// A work-item's pixels form a tile of 2^shift × GI_VW / 2^shift pixels, lane l at
+// (l mod 2^shift, l / 2^shift): a compact tile lies in fewer probe cells and map footprints than a
+// row of GI_VW pixels, so it takes fewer passes. 16 lanes: 8 × 2 at full resolution, 4 × 4 at
+// down > 1 (the faster shapes in A/B runs, docs/PERFORMANCE.md); 8 lanes: 4 × 2; one lane: 1 × 1.
+// The host sizes the launch from the same shapes (ProbeField::shade).
+#define PROBE_TILE_SHIFT(down) (GI_VW == 16 ? ((down) == 1 ? 3 : 2) : GI_VW == 8 ? 2 : 0)
+
 #if GI_VW > 1
-// The float4 records of the even ones of 2·GI_VW consecutive pixels from p, as four floatV.
-#define PROBE_LOAD_EVEN4(p, X, Y, Z, W)                                     \
-  {                                                                         \
-    floatV x0_, y0_, z0_, w0_, x1_, y1_, z1_, w1_;                          \
-    GI_AOS4_LOAD(p, x0_, y0_, z0_, w0_)                                     \
-    GI_AOS4_LOAD((p) + 4 * GI_VW, x1_, y1_, z1_, w1_)                       \
-    X = (floatV)(x0_.even, x1_.even);                                       \
-    Y = (floatV)(y0_.even, y1_.even);                                       \
-    Z = (floatV)(z0_.even, z1_.even);                                       \
-    W = (floatV)(w0_.even, w1_.even);                                       \
+// The float4 records of a full-resolution tile whose rows start at p and p + stride (floats), as
+// four floatV: a 4-pixel row segment is one 16-float load.
+#if GI_VW == 16
+#define PROBE_TILE_LOAD4(p, stride, X, Y, Z, W)                                                             \
+  {                                                                                                         \
+    float16 a_ = vload16(0, p), b_ = vload16(1, p), c_ = vload16(0, (p) + (stride)),                        \
+            d_ = vload16(1, (p) + (stride));                                                                \
+    X = (float16)(a_.s048c, b_.s048c, c_.s048c, d_.s048c);                                                  \
+    Y = (float16)(a_.s159d, b_.s159d, c_.s159d, d_.s159d);                                                  \
+    Z = (float16)(a_.s26ae, b_.s26ae, c_.s26ae, d_.s26ae);                                                  \
+    W = (float16)(a_.s37bf, b_.s37bf, c_.s37bf, d_.s37bf);                                                  \
+  }
+#else
+#define PROBE_TILE_LOAD4(p, stride, X, Y, Z, W)                 \
+  {                                                             \
+    float16 a_ = vload16(0, p), b_ = vload16(0, (p) + (stride)); \
+    X = (float8)(a_.s048c, b_.s048c);                           \
+    Y = (float8)(a_.s159d, b_.s159d);                           \
+    Z = (float8)(a_.s26ae, b_.s26ae);                           \
+    W = (float8)(a_.s37bf, b_.s37bf);                           \
   }
 #endif
+#endif
 
-// One work-item: GI_VW adjacent pixels (u, v) of a (⌈W/down⌉ × ⌈H/down⌉) image, pixel (u, v)
+// One work-item: a tile of pixels (u, v) of a (⌈W/down⌉ × ⌈H/down⌉) image, pixel (u, v)
 // evaluated at camera pixel (u·down, v·down): down = 1 writes the indirect radiance ρ/π · E,
 // down > 1 writes E for the geometry-aware upsampler (gi/filters). Background: 0.
 kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, global const float2* distance,
                         global const float4* probeStates, GiView camera,
                         global const float4* gPosition, global const float4* gGeoNormal, global const float4* gNormal,
                         global const float4* gAlbedo, int down, global float4* out) {
-  int u0 = get_global_id(0) * GI_VW, v = get_global_id(1);
+  int shift = PROBE_TILE_SHIFT(down), tileW = 1 << shift, tileH = GI_VW >> shift;
+  int u0 = get_global_id(0) * tileW, v0 = get_global_id(1) * tileH;
   int lw = (camera.width + down - 1) / down, lh = (camera.height + down - 1) / down;
-  if (u0 >= lw || v >= lh) return;
-  int valid = min(GI_VW, lw - u0);
-  size_t row = (size_t)min(v * down, camera.height - 1) * camera.width;
-  // Camera pixel of each lane (lanes past the end repeat the last valid one).
-  intV px = min(min((intV)(u0) + (intV)(GI_LANES), (intV)(u0 + valid - 1)) * down, camera.width - 1);
-  intV i = convert_intV(px) + (int)row;
+  if (u0 >= lw || v0 >= lh) return;
+  // Camera pixel of each lane (lanes past the image's edge repeat its last pixel).
+  intV u = min((intV)(u0) + ((intV)(GI_LANES) & (tileW - 1)), (intV)(lw - 1));
+  intV v = min((intV)(v0) + ((intV)(GI_LANES) >> shift), (intV)(lh - 1));
+  intV i = min(v * down, camera.height - 1) * camera.width + min(u * down, camera.width - 1);
   global const float* P = (global const float*)gPosition;
   global const float* G = (global const float*)gGeoNormal;
   global const float* N = (global const float*)gNormal;
   global const float* A = (global const float*)gAlbedo;
   floatV pw, unused;
   float3V x, ng, n, alb;
-  // The lanes' G-buffer records: a whole block's are contiguous vector loads (down = 2: the
-  // 2·GI_VW camera pixels from 2·u0, the even ones kept), else one 128-bit load per lane.
+  // The lanes' G-buffer records: a whole tile's rows are contiguous vector loads (down = 1), else
+  // one 128-bit load per lane.
 #if GI_VW > 1
-  size_t first = row + (size_t)u0 * down;
-  if (valid == GI_VW && down == 1) {
-    GI_AOS4_LOAD(P + 4 * first, x.x, x.y, x.z, pw)
-    GI_AOS4_LOAD(G + 4 * first, ng.x, ng.y, ng.z, unused)
-    GI_AOS4_LOAD(N + 4 * first, n.x, n.y, n.z, unused)
-  } else if (valid == GI_VW && down == 2 && 2 * (u0 + GI_VW) <= camera.width) {
-    PROBE_LOAD_EVEN4(P + 4 * first, x.x, x.y, x.z, pw)
-    PROBE_LOAD_EVEN4(G + 4 * first, ng.x, ng.y, ng.z, unused)
-    PROBE_LOAD_EVEN4(N + 4 * first, n.x, n.y, n.z, unused)
+  size_t first = (size_t)v0 * camera.width + u0;
+  int stride = 4 * camera.width;
+  if (down == 1 && u0 + tileW <= lw && v0 + tileH <= lh) {
+    PROBE_TILE_LOAD4(P + 4 * first, stride, x.x, x.y, x.z, pw)
+    PROBE_TILE_LOAD4(G + 4 * first, stride, ng.x, ng.y, ng.z, unused)
+    PROBE_TILE_LOAD4(N + 4 * first, stride, n.x, n.y, n.z, unused)
   } else
 #endif
   {
@@ -609,6 +624,8 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   float tmp[4 * GI_VW];
   floatV ox = GI_SEL(zero, E.x, surface), oy = GI_SEL(zero, E.y, surface), oz = GI_SEL(zero, E.z, surface);
   GI_AOS4_STORE(tmp, ox, oy, oz, zero)
-  global float4* o = out + (size_t)v * lw + u0;
-  for (int l = 0; l < valid; ++l) o[l] = vload4(l, tmp);
+  for (int l = 0; l < GI_VW; ++l) {
+    int ul = u0 + (l & (tileW - 1)), vl = v0 + (l >> shift);
+    if (ul < lw && vl < lh) out[(size_t)vl * lw + ul] = vload4(l, tmp);
+  }
 }

@@ -215,8 +215,13 @@ void ProbeField::shade(const GBuffer& g, cl::Buffer& indirect) {
     target = &low_;
   }
   shade_.args(grid_, irradiance_, distance_, states_, g.view, g.position, g.geoNormal, g.normal, g.albedo, d, *target);
-  int groups = (lw + vectorWidth_ - 1) / vectorWidth_;  // vector width's worth of pixels per item
-  ctx_.launch(shade_, cl::NDRange::d2(cl::roundUp(groups, 8), cl::roundUp(lh, 8), 8, 8), "probes: shade");
+  // One work-item shades a tile of 2^shift × vector width / 2^shift pixels (PROBE_TILE_SHIFT in
+  // kernels/gi/probes/probes.cl: 16 lanes 8 × 2 at full resolution and 4 × 4 below it, 8 lanes
+  // 4 × 2, one pixel at 1).
+  int shift = vectorWidth_ == 16 ? (d == 1 ? 3 : 2) : vectorWidth_ == 8 ? 2 : 0;
+  int tileW = 1 << shift, tileH = vectorWidth_ >> shift;
+  int groupsX = (lw + tileW - 1) / tileW, groupsY = (lh + tileH - 1) / tileH;
+  ctx_.launch(shade_, cl::NDRange::d2(cl::roundUp(groupsX, 8), cl::roundUp(groupsY, 8), 8, 8), "probes: shade");
   if (d > 1) upsampler_->run(g, low_, d, upsampleTest_, indirect);
 }
 
