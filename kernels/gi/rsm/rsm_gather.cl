@@ -12,7 +12,8 @@
 // Every sample is a per-lane load of a scattered texel (GI_VW adjacent pixels project to different
 // texels), and the instructions of those loads dominated the gather (docs/PERFORMANCE.md,
 // "Instant radiosity"). So `rsm_pack` first packs each RSM texel into one 16-byte record, read
-// with one 128-bit load per lane:
+// per lane with two 64-bit hardware gathers on AVX-512 CPUs (RSM_GATHER_RECORDS), else one 128-bit
+// load per lane:
 //   word 0     the texel's depth in the light's view, d = −z_view;
 //   words 1–3  flux R, G, B (floats) whose 15 low mantissa bits hold the normal's view-space x,
 //              y, z as signed integers m = round(s·n) (s: largest component ±16383),
@@ -155,6 +156,43 @@ typedef struct {
     sy = (0.5f - hy_ * invW_ * 0.5f) * (float)(res);                                \
   }
 
+// GI_VW records at the lanes' word offsets `at` (4 × record index) -> their four words as intV
+// planes w0..w3 (word 0..3). With AVX-512 (GI_VW 16 on x86 CPUs) this is the hardware gather of
+// each record's two 64-bit halves (two vpgatherdq per 8 lanes) and one even/odd split per plane.
+// The portable form (GI_GATHER_SPAN4: one 128-bit load per lane, then a transposition), as PoCL
+// compiles it for AVX-512, extracts the offsets lane by lane, splits each record into two 64-bit
+// loads and transposes across registers: 626 instructions per sample for the 64 pixels of a
+// work-item against 292 with these gathers, and 1.7× the CPU time on Sponza (docs/PERFORMANCE.md,
+// "`rsm` gather with AVX-512 hardware gathers"). Gathering the four 32-bit words separately
+// (vpgatherdd, twice the loads) took 1.3× the time of the 64-bit halves. Not used with AVX2 (GI_VW
+// 8): AVX2 gathers were 2× slower than the portable form on the AMD Zen 3 this engine also runs
+// on. The builtin takes a flat pointer: x86 OpenCL CPU devices have one address space (only they
+// define __AVX512F__); other devices, and compilers without the builtin, take the portable form.
+#if defined(__has_builtin) && GI_VW == 16 && defined(__AVX512F__)
+#if __has_builtin(__builtin_ia32_gathersiv8di)
+#define RSM_GATHER_HALVES(records, k, at8)                                                              \
+  as_int16(__builtin_ia32_gathersiv8di((long8)(0), (const void*)(size_t)((records) + 2 * (k)), (at8), \
+                                       (uchar)0xff, 4))
+#endif
+#endif
+#ifdef RSM_GATHER_HALVES
+// Lanes 0–7 and 8–15: words 0–1 (k = 0) and 2–3 (k = 1) of each record, which the even/odd
+// elements of those halves hold.
+#define RSM_GATHER_RECORDS(records, at, w0, w1, w2, w3)  \
+  {                                                      \
+    intV lo01_ = RSM_GATHER_HALVES(records, 0, (at).lo); \
+    intV hi01_ = RSM_GATHER_HALVES(records, 0, (at).hi); \
+    intV lo23_ = RSM_GATHER_HALVES(records, 1, (at).lo); \
+    intV hi23_ = RSM_GATHER_HALVES(records, 1, (at).hi); \
+    w0 = (intV)(lo01_.even, hi01_.even);                 \
+    w1 = (intV)(lo01_.odd, hi01_.odd);                   \
+    w2 = (intV)(lo23_.even, hi23_.even);                 \
+    w3 = (intV)(lo23_.odd, hi23_.odd);                   \
+  }
+#else
+#define RSM_GATHER_RECORDS(records, at, w0, w1, w2, w3) GI_GATHER_SPAN4(int, records, at, w0, w1, w2, w3)
+#endif
+
 // Per-pixel centres (rsm.sample_centre=pixel, the paper's form): every sample is the texel
 // floor(s + o) of the receiver's own projection s, one per-lane record load per sample and row.
 inline __attribute__((always_inline)) void rsm_pixel_centre_sum(
@@ -169,14 +207,17 @@ inline __attribute__((always_inline)) void rsm_pixel_centre_sum(
   floatV loClamp = (floatV)(-1.0f), hiClamp = (floatV)((float)res), zero = (floatV)(0.0f);
   for (int s = sBegin; s < sEnd; ++s) {
     float2 o = offsets[s];
-    float w = weights[s];
+    // The weight carries the 2^-(32 − RSM_N_BITS) of the normal's decoding below (a power of two:
+    // the products round exactly as with the unscaled factors).
+    float w = weights[s] * (1.0f / (float)(1 << (32 - RSM_N_BITS)));
 #pragma unroll
     for (int r = 0; r < GI_RSM_ROWS; ++r) {
       floatV fx = RSM_FLOOR(rsm_min(rsm_max(R[r].sx + o.x, loClamp), hiClamp));
       floatV fy = RSM_FLOOR(rsm_min(rsm_max(R[r].sy + o.y, loClamp), hiClamp));
-      uintV t = convert_uintV(convert_intV(fy) * pitch + convert_intV(fx) + (pitch + 1));
+      // The record's word offset 4·((fy + 1)·pitch + fx + 1), exact in float (< 2^24).
+      intV at = convert_intV(fy * (float)(4 * pitch) + (fx * 4.0f + (float)(4 * (pitch + 1))));
       intV w0, w1, w2, w3;
-      GI_GATHER_AOS4(int, records, t, w0, w1, w2, w3)
+      RSM_GATHER_RECORDS(records, at, w0, w1, w2, w3)
       floatV d = as_floatV(w0);
       floatV ux, uy;
       if (ortho) {
@@ -187,9 +228,11 @@ inline __attribute__((always_inline)) void rsm_pixel_centre_sum(
         uy = R[r].cy + d * (ts * fy + lateral);
       }
       floatV uz = d - R[r].dr;
-      floatV mx = convert_floatV(((w1) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
-      floatV my = convert_floatV(((w2) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
-      floatV mz = convert_floatV(((w3) << (32 - RSM_N_BITS)) >> (32 - RSM_N_BITS));
+      // The normal's integers m times 2^(32 − RSM_N_BITS) (the sign-extending shift back is
+      // left out: the scale is exact and `w` undoes it).
+      floatV mx = convert_floatV(w1 << (32 - RSM_N_BITS));
+      floatV my = convert_floatV(w2 << (32 - RSM_N_BITS));
+      floatV mz = convert_floatV(w3 << (32 - RSM_N_BITS));
       floatV d2 = ux * ux + uy * uy + uz * uz;
       floatV cp = mx * ux + my * uy + mz * uz;
       floatV cr = R[r].nx * ux + R[r].ny * uy + R[r].nz * uz;
