@@ -110,8 +110,9 @@ inline floatV rsm_max(floatV a, floatV b) { return GI_SEL(b, a, a > b); }
 inline floatV rsm_min(floatV a, floatV b) { return GI_SEL(b, a, a < b); }
 
 // floor() lane-wise as one rounding instruction: PoCL's library floor() is a compare-and-blend
-// sequence on x86 (no vroundps); clang's element-wise builtin maps to llvm.floor.
-#if defined(__has_builtin) && __has_builtin(__builtin_elementwise_floor)
+// sequence on x86 (no vroundps); clang's element-wise builtin maps to llvm.floor. x86 only:
+// oclgrind (a SPIR target) cannot execute llvm.floor and rejected the kernels.
+#if defined(__x86_64__) && defined(__has_builtin) && __has_builtin(__builtin_elementwise_floor)
 #define RSM_FLOOR(x) __builtin_elementwise_floor(x)
 #else
 #define RSM_FLOOR(x) floor(x)
