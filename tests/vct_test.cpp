@@ -14,6 +14,7 @@
 #include <random>
 
 #include "cl/gather_width.h"
+#include "gi/vct/vct_technique.h"
 #include "gi/vct/voxel_scene.h"
 #include "accuracy_support.h"
 #include "reference_scenes.h"
@@ -100,7 +101,7 @@ size_t levelOffset(int N, int level) {
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
 struct TraceParams {
   float startOffset = 0, maxDistance = 0, stepFactor = 0.5f, aoLambda = 0;
-  int32_t anisotropic = 0, applyAo = 0, footprintInFront = 0, pad = 0;
+  int32_t anisotropic = 0, applyAo = 0, footprintInFront = 0, levelSteps = 0;
 };
 
 struct ConeOut {
@@ -1204,23 +1205,26 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
         const cl::Buffer& aniso = an ? vs.aniso() : vs.iso();
         const cl::Buffer& shIso = sh ? vs.sh() : vs.iso();
         const cl::Buffer& shAniso = sh && an ? vs.shAniso() : shIso;
-        for (int variant = 0; variant < 2; ++variant) {
+        for (int variant = 0; variant < 3; ++variant) {
           TraceParams tp;
           tp.startOffset = 1.0f;
           tp.maxDistance = 32.0f;
           tp.anisotropic = an;
-          tp.footprintInFront = variant;  // variant 1: footprint in front and AO
-          tp.applyAo = variant;
+          tp.footprintInFront = variant == 1;  // variant 1: footprint in front and AO
+          tp.levelSteps = variant == 2;        // variant 2: the level-aligned march and AO
+          tp.applyAo = variant > 0;
           tp.aoLambda = 0.1f;
           diffuse.args(g, tp, vs.iso(), aniso, shIso, shAniso, W, H, W, H, bPos, bNrm, bAlb, lanesOut);
-          ctx.launch(diffuse, cl::NDRange::d2(cl::roundUp((W + lanes - 1) / lanes, 8), 8, 8, 8));
+          int tileW = vctDiffuseTileWidth(lanes), tileH = lanes / tileW;
+          ctx.launch(diffuse, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8),
+                                              cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
           points.args(g, tp, vs.iso(), aniso, shIso, shAniso, bPos, bNrm, count, scalarOut);
           ctx.launch(points, cl::NDRange::d1(cl::roundUp(count, 64), 64));
           std::vector<glm::vec4> got = ctx.download<glm::vec4>(lanesOut), ref = ctx.download<glm::vec4>(scalarOut);
           ctx.profiler().discard();
           float worst = 0, largest = 0;
           for (int i = 0; i < count; ++i) {
-            glm::vec3 expected = pos[i].w == 0 ? glm::vec3(0) : glm::vec3(ref[i]) * (variant ? ref[i].w : 1.0f);
+            glm::vec3 expected = pos[i].w == 0 ? glm::vec3(0) : glm::vec3(ref[i]) * (tp.applyAo ? ref[i].w : 1.0f);
             for (int c = 0; c < 3; ++c) {
               worst = std::max(worst, std::abs(got[i][c] - expected[c]));
               largest = std::max(largest, std::abs(expected[c]));
@@ -1228,7 +1232,8 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
           }
           std::printf("diffuse cones, %d lanes vs one cone at a time (%s voxels, %s mips, %s): max abs difference %.2e "
                       "(largest %.3f)\n", lanes, sh ? "SH" : "isotropic", an ? "anisotropic" : "isotropic",
-                      variant ? "footprint in front + AO" : "default", worst, largest);
+                      variant == 0 ? "continuous march" : variant == 1 ? "footprint in front + AO" : "level steps + AO",
+                      worst, largest);
           EXPECT_GT(largest, 0.05f);
           EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));
         }

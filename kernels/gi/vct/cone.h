@@ -43,6 +43,19 @@ inline float vct_cone_advance(float tanHalf, float stepFactor, float h0, float c
   return step;
 }
 
+// One front-to-back compositing step (above) of sample s (premultiplied radiance, α), its opacity
+// corrected for the step: c += (1 − a)·s.rgb·α'/α, a += (1 − a)·α' with α' = 1 − (1 − α)^(Δt/D),
+// occlusion weighted by 1/(1 + λt) (aoLambdaT = λt). Returns whether the cone is saturated.
+inline bool vct_composite(float4 s, float stepOverDiameter, float aoLambdaT, float3* c, float* a, float* occ) {
+  if (!(s.w > 1e-6f)) return false;
+  float alpha = fmin(s.w, 1.0f);
+  float corrected = 1.0f - powr(1.0f - alpha, stepOverDiameter);
+  *c += (1.0f - *a) * s.xyz * (corrected / s.w);
+  *occ += (1.0f - *occ) * corrected / (1.0f + aoLambdaT);
+  *a += (1.0f - *a) * corrected;
+  return *a >= 0.99f;
+}
+
 inline ConeResult vct_cone(VoxelMips m, float3 o, float3 d, float tanHalf, float maxDistance, float stepFactor,
                            float aoLambda, float h0, float cosN) {
   ConeResult r;
@@ -60,14 +73,40 @@ inline ConeResult vct_cone(VoxelMips m, float3 o, float3 d, float tanHalf, float
     // Footprint in front: below h = 2.5 voxels even level 0 would touch the surface's own voxels.
     if (h0 + t * cosN - 1.0f < 1.5f) continue;
     float4 s = vox_sample(m, p, d, log2(diameter));
-    if (s.w > 1e-6f) {
-      float alpha = fmin(s.w, 1.0f);
-      float corrected = 1.0f - powr(1.0f - alpha, step / diameter);
-      c += (1.0f - a) * s.xyz * (corrected / s.w);
-      occ += (1.0f - occ) * corrected / (1.0f + aoLambda * t);
-      a += (1.0f - a) * corrected;
-      if (a >= 0.99f) break;
-    }
+    if (vct_composite(s, step / diameter, aoLambda * t, &c, &a, &occ)) break;
+  }
+  r.radiance = (float4)(c, a);
+  r.occlusion = occ;
+  return r;
+}
+
+// The level-aligned march (vct.diffuse_steps=levels, the default for the diffuse cones): samples
+// where the diameter is a power of two, D_l = 2^l voxels at t_l = 2^l / (2·tan θ), l = 0, 1, …, so
+// that each sample reads exactly one level, log2 D_l = l, with one trilinear lookup (the march
+// above blends two levels at fractional log2 D). The sample at t_l stands for the segment from
+// t_(l−1) (t_(−1) = 0) to t_l: Δt = t_l / 2 for l ≥ 1, i.e. Δt/D = 1/(4·tan θ) = 0.43 for the 60°
+// diffuse cones, and its opacity is corrected by Δt/D as above. Levels past the top of the chain
+// sample the top (1³) level with the cone's diameter. Same stop rules as vct_cone. Without
+// footprint-in-front only (that mode caps D below the cone's diameter: the continuous march).
+inline ConeResult vct_cone_levels(VoxelMips m, float3 o, float3 d, float tanHalf, float maxDistance, float aoLambda) {
+  ConeResult r;
+  float3 c = (float3)(0.0f);
+  float a = 0.0f, occ = 0.0f;
+  float tPrevious = 0.0f, limit = (float)m.N;
+  float diameter = 1.0f;
+  for (int level = 0;; ++level, diameter *= 2.0f) {
+    float t = diameter * (0.5f / tanHalf);
+    if (t > maxDistance) break;
+    float step = t - tPrevious;
+    tPrevious = t;
+    float3 p = o + d * t;
+    float margin = 0.5f * diameter;
+    if (any(p < -margin) || any(p > limit + margin)) break;
+    float4 s = vox_level_sample(m, min(level, m.levels - 1), p, d);
+#if GI_VCT_SH
+    s.xyz = fmax(s.xyz, 0.0f);
+#endif
+    if (vct_composite(s, step / diameter, aoLambda * t, &c, &a, &occ)) break;
   }
   r.radiance = (float4)(c, a);
   r.occlusion = occ;
@@ -111,8 +150,9 @@ constant float4 VCT_CONES[9] = {
 #ifdef VCT_CONE_COUNT
 // Irradiance (rgb) at a surface point p (voxel units) with normal n from the diffuse cone set,
 // starting start_offset voxels along n; w: ambient-occlusion visibility 1 − Σ (w_i/π)·occlusion_i.
+// levelSteps: the level-aligned march (vct_cone_levels) unless footprintInFront.
 inline float4 vct_diffuse_irradiance(VoxelMips m, float3 p, float3 n, float startOffset, float maxDistance,
-                                     float stepFactor, float aoLambda, int footprintInFront) {
+                                     float stepFactor, float aoLambda, int footprintInFront, int levelSteps) {
   float3 t, b;
   orthonormal_basis(n, &t, &b);
   float3 o = p + n * startOffset;
@@ -121,8 +161,10 @@ inline float4 vct_diffuse_irradiance(VoxelMips m, float3 p, float3 n, float star
   for (int i = 0; i < VCT_CONE_COUNT; ++i) {
     float4 cone = VCT_CONES[i];
     float3 d = normalize(t * cone.x + b * cone.y + n * cone.z);
-    ConeResult r = vct_cone(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
-                            footprintInFront ? startOffset : INFINITY, cone.z);
+    ConeResult r = levelSteps && !footprintInFront
+                       ? vct_cone_levels(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, aoLambda)
+                       : vct_cone(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
+                                  footprintInFront ? startOffset : INFINITY, cone.z);
     E += cone.w * r.radiance.xyz;
     occlusion += cone.w * GI_INV_PI * r.occlusion;
   }

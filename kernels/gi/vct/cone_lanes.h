@@ -42,9 +42,9 @@ inline VoxelMipsV vox_mips_lanes(VoxelMips m) {
 // that each loaded vector is consumed whole (picking single elements out of the loads made the
 // compiler split them into 8-byte loads and element inserts).
 #if GI_VW >= 8
-__attribute__((always_inline)) inline void vct_pair_planes8(global const float* p, int8 i, float8 out[8]) {
-  float8 L0 = vload8(0, p + i.s0), L1 = vload8(0, p + i.s1), L2 = vload8(0, p + i.s2), L3 = vload8(0, p + i.s3);
-  float8 L4 = vload8(0, p + i.s4), L5 = vload8(0, p + i.s5), L6 = vload8(0, p + i.s6), L7 = vload8(0, p + i.s7);
+// The transposition: L[k] = the pair of lane k (R0 G0 B0 A0 R1 G1 B1 A1) → out = the 8 planes.
+__attribute__((always_inline)) inline void vct_transpose_pairs8(float8 L0, float8 L1, float8 L2, float8 L3, float8 L4,
+                                                                float8 L5, float8 L6, float8 L7, float8 out[8]) {
   float8 t0 = (float8)(L0.s0, L1.s0, L0.s1, L1.s1, L0.s4, L1.s4, L0.s5, L1.s5);
   float8 t1 = (float8)(L0.s2, L1.s2, L0.s3, L1.s3, L0.s6, L1.s6, L0.s7, L1.s7);
   float8 t2 = (float8)(L2.s0, L3.s0, L2.s1, L3.s1, L2.s4, L3.s4, L2.s5, L3.s5);
@@ -67,6 +67,21 @@ __attribute__((always_inline)) inline void vct_pair_planes8(global const float* 
   out[6] = (float8)(u2.hi, u6.hi);
   out[7] = (float8)(u3.hi, u7.hi);
 }
+
+__attribute__((always_inline)) inline void vct_pair_planes8(global const float* p, int8 i, float8 out[8]) {
+  vct_transpose_pairs8(vload8(0, p + i.s0), vload8(0, p + i.s1), vload8(0, p + i.s2), vload8(0, p + i.s3),
+                       vload8(0, p + i.s4), vload8(0, p + i.s5), vload8(0, p + i.s6), vload8(0, p + i.s7), out);
+}
+
+// The planes of the blend w0·pair(p + i0) + w1·pair(p + i1) + w2·pair(p + i2) per lane: three
+// volumes with the same stencil combined before the one transposition.
+#define VCT_BLEND3_LANE(k) (w0.s##k * vload8(0, p + i0.s##k) + w1.s##k * vload8(0, p + i1.s##k) + w2.s##k * vload8(0, p + i2.s##k))
+__attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const float* p, int8 i0, int8 i1, int8 i2,
+                                                                   float8 w0, float8 w1, float8 w2, float8 out[8]) {
+  vct_transpose_pairs8(VCT_BLEND3_LANE(0), VCT_BLEND3_LANE(1), VCT_BLEND3_LANE(2), VCT_BLEND3_LANE(3),
+                       VCT_BLEND3_LANE(4), VCT_BLEND3_LANE(5), VCT_BLEND3_LANE(6), VCT_BLEND3_LANE(7), out);
+}
+#undef VCT_BLEND3_LANE
 #endif
 #if GI_VW == 16
 #define VCT_GATHER_PAIR(p, i, R0, G0, B0, A0, R1, G1, B1, A1) \
@@ -112,6 +127,92 @@ __attribute__((always_inline)) inline void vct_pair_planes8(global const float* 
   }
 #endif
 
+// Lane 0's value of a lane vector.
+#if GI_VW == 1
+#define VCT_LANE0(v) (v)
+#else
+#define VCT_LANE0(v) ((v).s0)
+#endif
+
+// VCT_GATHER_PAIR of the blend Σ_k w_k·pair(p + i_k) of three volumes (vct_pair_planes8_blend3).
+#if GI_VW == 16
+#define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1) \
+  {                                                                                    \
+    float8 lo_[8], hi_[8];                                                             \
+    vct_pair_planes8_blend3(p, (i0).lo, (i1).lo, (i2).lo, (w0).lo, (w1).lo, (w2).lo, lo_); \
+    vct_pair_planes8_blend3(p, (i0).hi, (i1).hi, (i2).hi, (w0).hi, (w1).hi, (w2).hi, hi_); \
+    R0 = (float16)(lo_[0], hi_[0]);                                                    \
+    G0 = (float16)(lo_[1], hi_[1]);                                                    \
+    B0 = (float16)(lo_[2], hi_[2]);                                                    \
+    A0 = (float16)(lo_[3], hi_[3]);                                                    \
+    R1 = (float16)(lo_[4], hi_[4]);                                                    \
+    G1 = (float16)(lo_[5], hi_[5]);                                                    \
+    B1 = (float16)(lo_[6], hi_[6]);                                                    \
+    A1 = (float16)(lo_[7], hi_[7]);                                                    \
+  }
+#elif GI_VW == 8
+#define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1) \
+  {                                                                                    \
+    float8 t_[8];                                                                      \
+    vct_pair_planes8_blend3(p, i0, i1, i2, w0, w1, w2, t_);                            \
+    R0 = t_[0];                                                                        \
+    G0 = t_[1];                                                                        \
+    B0 = t_[2];                                                                        \
+    A0 = t_[3];                                                                        \
+    R1 = t_[4];                                                                        \
+    G1 = t_[5];                                                                        \
+    B1 = t_[6];                                                                        \
+    A1 = t_[7];                                                                        \
+  }
+#elif GI_VW == 1
+#define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1)                 \
+  {                                                                                                    \
+    float8 a_ = (w0) * vload8(0, (p) + (i0)) + (w1) * vload8(0, (p) + (i1)) + (w2) * vload8(0, (p) + (i2)); \
+    R0 = a_.s0;                                                                                        \
+    G0 = a_.s1;                                                                                        \
+    B0 = a_.s2;                                                                                        \
+    A0 = a_.s3;                                                                                        \
+    R1 = a_.s4;                                                                                        \
+    G1 = a_.s5;                                                                                        \
+    B1 = a_.s6;                                                                                        \
+    A1 = a_.s7;                                                                                        \
+  }
+#endif
+
+// The stencil of a trilinear lookup at p (level-0 voxel units) in a volume of n³ voxels, scale =
+// n / N, per lane: the tap pair along x of each (y, z) row starts at xs = clamp(ix, 0, n − 2) with
+// weights wFirst, wSecond (each tap's weight moved to its place in the pair; a tap outside the
+// volume weighs 0, and so does the pair's other record); rows yr, zr clamped into the volume with
+// weights wy, wz (0 outside).
+typedef struct {
+  intV xs, yr[2], zr[2];
+  floatV wFirst, wSecond, wy[2], wz[2];
+} VctStencilV;
+
+__attribute__((always_inline)) inline VctStencilV vct_stencil_lanes(float3V p, floatV scale, intV n) {
+  VctStencilV st;
+  floatV ux = p.x * scale - 0.5f, uy = p.y * scale - 0.5f, uz = p.z * scale - 0.5f;
+  floatV flx = floor(ux), fly = floor(uy), flz = floor(uz);
+  floatV fx = ux - flx, fy = uy - fly, fz = uz - flz;
+  intV ix = convert_intV(flx), iy = convert_intV(fly), iz = convert_intV(flz);
+  floatV zero = (floatV)(0.0f);
+  // Per axis, the weights of taps i and i + 1 (0 outside the volume).
+  floatV wx0 = GI_SEL(zero, 1.0f - fx, ix >= 0 && ix < n), wx1 = GI_SEL(zero, fx, ix >= -1 && ix < n - 1);
+  st.wy[0] = GI_SEL(zero, 1.0f - fy, iy >= 0 && iy < n);
+  st.wy[1] = GI_SEL(zero, fy, iy >= -1 && iy < n - 1);
+  st.wz[0] = GI_SEL(zero, 1.0f - fz, iz >= 0 && iz < n);
+  st.wz[1] = GI_SEL(zero, fz, iz >= -1 && iz < n - 1);
+  st.yr[0] = min(max(iy, 0), n - 1);
+  st.yr[1] = min(max(iy + 1, 0), n - 1);
+  st.zr[0] = min(max(iz, 0), n - 1);
+  st.zr[1] = min(max(iz + 1, 0), n - 1);
+  st.xs = max(min(ix, n - 2), 0);
+  intV below = ix < st.xs, above = ix > st.xs;
+  st.wFirst = GI_SEL(GI_SEL(wx0, zero, above), wx1, below);
+  st.wSecond = GI_SEL(GI_SEL(wx1, wx0, above), zero, below);
+  return st;
+}
+
 // acc += weight × the trilinear lookup at p of the volume of n³ voxels, n = 2^shift (scale = n / N),
 // starting at voxel `base` (all per lane) of `vol` (radiance, α) or, with SH voxels, of `shVol`
 // evaluated against basis (Y0, Y1y, Y1z, Y1x) with α from `vol` (vox_trilinear / vox_trilinear_sh).
@@ -123,21 +224,9 @@ __attribute__((always_inline)) inline void vct_pair_planes8(global const float* 
 __attribute__((always_inline)) inline void vox_trilinear_lanes(global const float* vol, global const float* shVol, intV base, intV shift, float3V p,
                                 floatV scale, floatV weight, floatV Y0, floatV Y1y, floatV Y1z, floatV Y1x, RgbaV* acc) {
   intV n = (intV)(1) << shift;
-  floatV ux = p.x * scale - 0.5f, uy = p.y * scale - 0.5f, uz = p.z * scale - 0.5f;
-  floatV flx = floor(ux), fly = floor(uy), flz = floor(uz);
-  floatV fx = ux - flx, fy = uy - fly, fz = uz - flz;
-  intV ix = convert_intV(flx), iy = convert_intV(fly), iz = convert_intV(flz);
-  floatV zero = (floatV)(0.0f);
-  // Per axis, the weights of taps i and i + 1 (0 outside the volume).
-  floatV wx0 = GI_SEL(zero, 1.0f - fx, ix >= 0 && ix < n), wx1 = GI_SEL(zero, fx, ix >= -1 && ix < n - 1);
-  floatV wy[2] = {GI_SEL(zero, 1.0f - fy, iy >= 0 && iy < n), GI_SEL(zero, fy, iy >= -1 && iy < n - 1)};
-  floatV wz[2] = {GI_SEL(zero, 1.0f - fz, iz >= 0 && iz < n), GI_SEL(zero, fz, iz >= -1 && iz < n - 1)};
-  intV yr[2] = {min(max(iy, 0), n - 1), min(max(iy + 1, 0), n - 1)};
-  intV zr[2] = {min(max(iz, 0), n - 1), min(max(iz + 1, 0), n - 1)};
-  intV xs = max(min(ix, n - 2), 0);
-  intV below = ix < xs, above = ix > xs;
-  floatV wFirst = GI_SEL(GI_SEL(wx0, zero, above), wx1, below);
-  floatV wSecond = GI_SEL(GI_SEL(wx1, wx0, above), zero, below);
+  VctStencilV st = vct_stencil_lanes(p, scale, n);
+  intV xs = st.xs, yr[2] = {st.yr[0], st.yr[1]}, zr[2] = {st.zr[0], st.zr[1]};
+  floatV wFirst = st.wFirst, wSecond = st.wSecond, wy[2] = {st.wy[0], st.wy[1]}, wz[2] = {st.wz[0], st.wz[1]};
 #pragma unroll
   for (int row = 0; row < 4; ++row) {
     int yb = row & 1, zb = row >> 1;
@@ -208,6 +297,95 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
   }
 }
 
+// acc += level `level` (the same in every lane) seen along d, for the level-aligned march
+// (vct_cone_levels_lanes). Radiance voxels at an anisotropic level: the three directional volumes
+// facing d share one stencil, and a lookup is linear in the records, so Σ_axis d_axis²·trilinear(V_axis)
+// = trilinear(Σ_axis d_axis²·V_axis): each tap pair is blended from the three volumes per lane
+// before one transposition (one third of the shuffles of three lookups). Same taps and weights as
+// vox_level_sample_lanes; the sums are associated differently (not bit-identical to it).
+__attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelMipsV m, int level, float3V p, float3V d,
+                                                                          RgbaV* acc) {
+#if GI_VCT_SH
+  vox_level_sample_lanes(m, (intV)(level), p, d, (floatV)(1.0f), acc);
+#else
+  int directional = m.anisotropic && level > 0;
+  int shift = (31 - clz(m.N)) - level, n = 1 << shift;
+  float scale = as_float((uint)(127 - level) << 23);  // 2^−level
+  int n3 = 1 << (3 * shift), N3 = m.N * m.N * m.N;
+  int offset = (0x09249249 & ((1 << (3 * level)) - 1)) << (3 * shift + 3);  // vox_level_sample_lanes
+  int level6 = 6 * (offset - N3);
+  // The volumes read, in float-element offsets: the isotropic level (bx only, weight 1), or the
+  // directional volume 2·axis (+) or 2·axis + 1 (−) of each axis facing d, weights d_axis².
+  global const float* chain = directional ? m.aniso : m.iso;
+  intV bx = (intV)(4 * offset), by = bx, bz = bx;
+  floatV dx2 = (floatV)(1.0f), dy2 = (floatV)(0.0f), dz2 = dy2;
+  if (directional) {
+    bx = 4 * (level6 + (0 + GI_SEL((intV)(1), (intV)(0), d.x >= 0.0f)) * n3);
+    by = 4 * (level6 + (2 + GI_SEL((intV)(1), (intV)(0), d.y >= 0.0f)) * n3);
+    bz = 4 * (level6 + (4 + GI_SEL((intV)(1), (intV)(0), d.z >= 0.0f)) * n3);
+    dx2 = d.x * d.x;
+    dy2 = d.y * d.y;
+    dz2 = d.z * d.z;
+  }
+  VctStencilV st = vct_stencil_lanes(p, (floatV)(scale), (intV)(n));
+  intV xs = st.xs, yr[2] = {st.yr[0], st.yr[1]}, zr[2] = {st.zr[0], st.zr[1]};
+  floatV wFirst = st.wFirst, wSecond = st.wSecond, wy[2] = {st.wy[0], st.wy[1]}, wz[2] = {st.wz[0], st.wz[1]};
+  // At the coarse levels the lanes (neighbouring pixels, same cone of the set) mostly read the
+  // same cells of the same volumes: then each row's pairs are loaded once and blended per lane,
+  // with no per-lane loads or transposition.
+  int x0 = VCT_LANE0(xs), y0 = VCT_LANE0(yr[0]), y1 = VCT_LANE0(yr[1]), z0 = VCT_LANE0(zr[0]), z1 = VCT_LANE0(zr[1]);
+  int bx0 = VCT_LANE0(bx), by0 = VCT_LANE0(by), bz0 = VCT_LANE0(bz);
+  // (Level 0 is left out: its 1-voxel cells are rarely shared, and the test costs more than it saves.)
+  int shared = level > 0 && GI_ALL(xs == x0 && yr[0] == y0 && yr[1] == y1 && zr[0] == z0 && zr[1] == z1 &&
+                                   bx == bx0 && by == by0 && bz == bz0);
+#pragma unroll
+  for (int row = 0; row < 4; ++row) {
+    int yb = row & 1, zb = row >> 1;
+    floatV w0 = wFirst * wy[yb] * wz[zb], w1 = wSecond * wy[yb] * wz[zb];
+    floatV r0, g0, b0, a0, r1, g1, b1, a1;
+    if (shared) {
+      int idx0 = 4 * (((((zb ? z1 : z0) << shift) + (yb ? y1 : y0)) << shift) + x0);
+      float8 px = vload8(0, chain + bx0 + idx0);
+      if (directional) {
+        float8 py = vload8(0, chain + by0 + idx0), pz = vload8(0, chain + bz0 + idx0);
+        r0 = dx2 * px.s0 + dy2 * py.s0 + dz2 * pz.s0;
+        g0 = dx2 * px.s1 + dy2 * py.s1 + dz2 * pz.s1;
+        b0 = dx2 * px.s2 + dy2 * py.s2 + dz2 * pz.s2;
+        a0 = dx2 * px.s3 + dy2 * py.s3 + dz2 * pz.s3;
+        r1 = dx2 * px.s4 + dy2 * py.s4 + dz2 * pz.s4;
+        g1 = dx2 * px.s5 + dy2 * py.s5 + dz2 * pz.s5;
+        b1 = dx2 * px.s6 + dy2 * py.s6 + dz2 * pz.s6;
+        a1 = dx2 * px.s7 + dy2 * py.s7 + dz2 * pz.s7;
+      } else {
+        r0 = (floatV)(px.s0);
+        g0 = (floatV)(px.s1);
+        b0 = (floatV)(px.s2);
+        a0 = (floatV)(px.s3);
+        r1 = (floatV)(px.s4);
+        g1 = (floatV)(px.s5);
+        b1 = (floatV)(px.s6);
+        a1 = (floatV)(px.s7);
+      }
+    } else {
+      intV idx = 4 * ((((zr[zb] << shift) + yr[yb]) << shift) + xs);
+      if (directional) {
+        VCT_GATHER_PAIR_BLEND3(chain, bx + idx, by + idx, bz + idx, dx2, dy2, dz2, r0, g0, b0, a0, r1, g1, b1, a1)
+      } else {
+        VCT_GATHER_PAIR(chain, bx + idx, r0, g0, b0, a0, r1, g1, b1, a1)
+      }
+    }
+    acc->r += w0 * r0;
+    acc->g += w0 * g0;
+    acc->b += w0 * b0;
+    acc->a += w0 * a0;
+    acc->r += w1 * r1;
+    acc->g += w1 * g1;
+    acc->b += w1 * b1;
+    acc->a += w1 * a1;
+  }
+#endif
+}
+
 // vox_sample for the lanes: quadrilinear at a fractional level per lane.
 inline RgbaV vox_sample_lanes(VoxelMipsV m, float3V p, float3V d, floatV level) {
   level = clamp(level, 0.0f, (float)(m.levels - 1));
@@ -252,6 +430,22 @@ inline floatV pow01V(floatV x, floatV r) {
   return p * as_floatV(convert_uintV(convert_intV(i) + 127) << 23);
 }
 
+// One front-to-back compositing step of the lanes where `sampled` (vct_cone's): the sample s with
+// its opacity corrected for the step, 1 − (1 − α)^(Δt/D) (stepOverDiameter = Δt/D), and the AO
+// occlusion weighted by aoFalloff = 1/(1 + λt).
+__attribute__((always_inline)) inline void vct_composite_lanes(RgbaV s, intV sampled, floatV stepOverDiameter,
+                                                               floatV aoFalloff, RgbaV* c, floatV* occ) {
+  intV live = sampled && s.a > 1e-6f;
+  floatV alpha = fmin(s.a, 1.0f);
+  floatV corrected = 1.0f - pow01V(1.0f - alpha, stepOverDiameter);
+  floatV k = GI_SEL((floatV)(0.0f), (1.0f - c->a) * (corrected / s.a), live);
+  c->r += k * s.r;
+  c->g += k * s.g;
+  c->b += k * s.b;
+  *occ += GI_SEL((floatV)(0.0f), (1.0f - *occ) * corrected * aoFalloff, live);
+  c->a += GI_SEL((floatV)(0.0f), (1.0f - c->a) * corrected, live);
+}
+
 // vct_footprint lane-wise; the largest power of two ≤ the bound by clearing its mantissa.
 inline floatV vct_footprint_lanes(floatV tanHalf, floatV t, float h0, floatV cosN) {
   floatV bound = (h0 + t * cosN - 1.0f) * (1.0f / 1.5f);
@@ -284,15 +478,43 @@ inline RgbaV vct_cone_lanes(VoxelMipsV m, float3V o, float3V d, floatV tanHalf, 
     intV sampled = !done && h0 + t * cosN - 1.0f >= 1.5f;
     if (!GI_ANY(sampled)) continue;
     RgbaV s = vox_sample_lanes(m, p, d, log2V(diameter));
-    intV live = sampled && s.a > 1e-6f;
-    floatV alpha = fmin(s.a, 1.0f);
-    floatV corrected = 1.0f - pow01V(1.0f - alpha, step / diameter);
-    floatV k = GI_SEL((floatV)(0.0f), (1.0f - c.a) * (corrected / s.a), live);
-    c.r += k * s.r;
-    c.g += k * s.g;
-    c.b += k * s.b;
-    occ += GI_SEL((floatV)(0.0f), (1.0f - occ) * corrected / (1.0f + aoLambda * t), live);
-    c.a += GI_SEL((floatV)(0.0f), (1.0f - c.a) * corrected, live);
+    vct_composite_lanes(s, sampled, step / diameter, 1.0f / (1.0f + aoLambda * t), &c, &occ);
+    done = done || c.a >= 0.99f;
+  }
+  *occlusion = occ;
+  return c;
+}
+
+// vct_cone_levels for GI_VW cones of one half-angle (the diffuse set): every lane has the same
+// distances, levels and steps, so the schedule is scalar and each step is one trilinear lookup per
+// lane (one level, uniform across the lanes).
+inline RgbaV vct_cone_levels_lanes(VoxelMipsV m, float3V o, float3V d, float tanHalf, float maxDistance,
+                                   float aoLambda, floatV* occlusion) {
+  RgbaV c;
+  c.r = c.g = c.b = c.a = (floatV)(0.0f);
+  floatV occ = (floatV)(0.0f);
+  intV done = (intV)(0);
+  float tPrevious = 0.0f, limit = (float)m.N;
+  float diameter = 1.0f;
+  for (int level = 0;; ++level, diameter *= 2.0f) {
+    float t = diameter * (0.5f / tanHalf);
+    if (t > maxDistance) break;
+    float step = t - tPrevious;
+    tPrevious = t;
+    float margin = 0.5f * diameter;
+    float3V p = addV(o, scaleV(d, (floatV)(t)));
+    done = done || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin || p.y > limit + margin ||
+           p.z > limit + margin;
+    if (GI_ALL(done)) break;
+    RgbaV s;
+    s.r = s.g = s.b = s.a = (floatV)(0.0f);
+    vox_level_sample_uniform_lanes(m, min(level, m.levels - 1), p, d, &s);
+#if GI_VCT_SH
+    s.r = fmax(s.r, 0.0f);
+    s.g = fmax(s.g, 0.0f);
+    s.b = fmax(s.b, 0.0f);
+#endif
+    vct_composite_lanes(s, !done, (floatV)(step / diameter), (floatV)(1.0f / (1.0f + aoLambda * t)), &c, &occ);
     done = done || c.a >= 0.99f;
   }
   *occlusion = occ;
@@ -303,7 +525,7 @@ inline RgbaV vct_cone_lanes(VoxelMipsV m, float3V o, float3V d, floatV tanHalf, 
 // vct_diffuse_irradiance for GI_VW surface points p with normals n: irradiance (r, g, b) and, in
 // a, the AO visibility.
 inline RgbaV vct_diffuse_irradiance_lanes(VoxelMipsV m, float3V p, float3V n, float startOffset, float maxDistance,
-                                          float stepFactor, float aoLambda, int footprintInFront) {
+                                          float stepFactor, float aoLambda, int footprintInFront, int levelSteps) {
   // orthonormal_basis (common/math.h) lane-wise.
   floatV s = GI_SEL((floatV)(-1.0f), (floatV)(1.0f), n.z >= 0.0f);
   floatV a = -1.0f / (s + n.z);
@@ -319,8 +541,10 @@ inline RgbaV vct_diffuse_irradiance_lanes(VoxelMipsV m, float3V p, float3V n, fl
     float3V d = addV(addV(scaleV(t, (floatV)(cone.x)), scaleV(b, (floatV)(cone.y))), scaleV(n, (floatV)(cone.z)));
     d = scaleV(d, rsqrt(dotV(d, d)));
     floatV occ;
-    RgbaV r = vct_cone_lanes(m, o, d, (floatV)(VCT_DIFFUSE_TAN_HALF), maxDistance, stepFactor, aoLambda,
-                             footprintInFront ? startOffset : INFINITY, (floatV)(cone.z), &occ);
+    RgbaV r = levelSteps && !footprintInFront
+                  ? vct_cone_levels_lanes(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, aoLambda, &occ)
+                  : vct_cone_lanes(m, o, d, (floatV)(VCT_DIFFUSE_TAN_HALF), maxDistance, stepFactor, aoLambda,
+                                   footprintInFront ? startOffset : INFINITY, (floatV)(cone.z), &occ);
     E.r += cone.w * r.r;
     E.g += cone.w * r.g;
     E.b += cone.w * r.b;

@@ -6,7 +6,7 @@
 // be any buffer.
 //
 // vct_diffuse   per traced pixel: E from the diffuse cones at its position and shading normal;
-//               GI_VW adjacent traced pixels per work-item (cone_lanes.h).
+//               a tile of GI_VW traced pixels per work-item (VCT_TILE_W × VCT_TILE_H, cone_lanes.h).
 //               GI_DOWN = 1 writes L = ρ/π · E (· voxel AO visibility if asked) per pixel;
 //               GI_DOWN > 1 writes E for the geometry-aware upsampler (filters/discontinuity.cl).
 // vct_specular  per pixel (GI_VW per work-item, cone_lanes.h): adds F_Schlick(F0, n·ωo) · L_cone
@@ -32,7 +32,7 @@ typedef struct {
   int anisotropic;
   int applyAo;        // multiply the diffuse result by the voxel AO visibility
   int footprintInFront;  // keep the sampled footprint in front of the surface (cone.h)
-  int pad;
+  int levelSteps;        // diffuse cones: the level-aligned march (cone.h, vct_cone_levels)
 } VctTraceParams;
 
 inline float3 vct_to_voxels(GiVoxelGrid g, float3 x) { return (x - vload3(0, g.origin)) / g.voxel_size; }
@@ -52,14 +52,24 @@ inline VoxelMips vct_mips(GiVoxelGrid g, VctTraceParams tp, global const float4*
 
 #define VCT_MIP_ARGS global const float4 *iso, global const float4 *aniso, global const float4 *sh, global const float4 *shAniso
 
+// vct_diffuse's lanes are a tile of VCT_TILE_W × VCT_TILE_H traced pixels (4×4 for 16 lanes, 4×2 for
+// 8): neighbouring pixels' cones read the same cells of the coarse levels more often than those of
+// a row of GI_VW pixels, and such lookups are shared (vox_level_sample_uniform_lanes). The host
+// launches ⌈lowWidth / VCT_TILE_W⌉ × ⌈lowHeight / VCT_TILE_H⌉ work-items.
+#if GI_VW >= 8
+#define VCT_TILE_W 4
+#else
+#define VCT_TILE_W 1
+#endif
+#define VCT_TILE_H (GI_VW / VCT_TILE_W)
+
 kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int width, int height, int lowWidth,
                         int lowHeight, global const float4* gPosition, global const float4* gNormal,
                         global const float4* gAlbedo, global float4* out) {
-  int gx = get_global_id(0), v = get_global_id(1);
-  int u0 = gx * GI_VW;
-  if (u0 >= lowWidth || v >= lowHeight) return;
-  intV u = min(u0 + GI_LANES, lowWidth - 1);
-  intV q = (intV)(min(v * GI_DOWN, height - 1) * width) + min(u * GI_DOWN, width - 1);
+  int u0 = get_global_id(0) * VCT_TILE_W, v0 = get_global_id(1) * VCT_TILE_H;
+  if (u0 >= lowWidth || v0 >= lowHeight) return;
+  intV u = min(u0 + GI_LANES % VCT_TILE_W, lowWidth - 1), v = min(v0 + GI_LANES / VCT_TILE_W, lowHeight - 1);
+  intV q = min(v * GI_DOWN, height - 1) * width + min(u * GI_DOWN, width - 1);
   floatV px, py, pz, pw, nx, ny, nz, nw;
   GI_GATHER_AOS4(float, (global const float*)gPosition, q, px, py, pz, pw)
   GI_GATHER_AOS4(float, (global const float*)gNormal, q, nx, ny, nz, nw)
@@ -71,7 +81,7 @@ kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int w
                     (pz - origin.z) / grid.voxel_size);
     RgbaV e = vct_diffuse_irradiance_lanes(vox_mips_lanes(vct_mips(grid, tp, iso, aniso, sh, shAniso)), p,
                                            f3v(nx, ny, nz), tp.startOffset, tp.maxDistance, tp.stepFactor,
-                                           tp.aoLambda, tp.footprintInFront);
+                                           tp.aoLambda, tp.footprintInFront, tp.levelSteps);
     floatV scale = tp.applyAo ? e.a : (floatV)(1.0f);
 #if GI_DOWN == 1
     floatV ar, ag, ab, aw;
@@ -93,8 +103,10 @@ kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int w
   vstoreV(er, 0, vals[0]);
   vstoreV(eg, 0, vals[1]);
   vstoreV(eb, 0, vals[2]);
-  for (int l = 0; l < GI_VW && u0 + l < lowWidth; ++l)
-    out[(size_t)v * lowWidth + u0 + l] = (float4)(vals[0][l], vals[1][l], vals[2][l], 0.0f);
+  for (int l = 0; l < GI_VW; ++l) {
+    int ul = u0 + l % VCT_TILE_W, vl = v0 + l / VCT_TILE_W;
+    if (ul < lowWidth && vl < lowHeight) out[(size_t)vl * lowWidth + ul] = (float4)(vals[0][l], vals[1][l], vals[2][l], 0.0f);
+  }
 }
 
 kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiView camera,
@@ -152,7 +164,7 @@ kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* a
   VoxelSurface s = vox_resolve(grid, acc, v);
   float4 e = vct_diffuse_irradiance(vct_mips(grid, tp, iso, aniso, sh, shAniso), vct_to_voxels(grid, s.position),
                                     s.normal, tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda,
-                                    tp.footprintInFront);
+                                    tp.footprintInFront, tp.levelSteps);
   level0Out[v] = own + (float4)(s.albedo * GI_INV_PI * e.xyz * s.alpha, 0.0f);
 }
 
@@ -176,5 +188,5 @@ kernel void vct_irradiance_points(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_A
   if (i >= count) return;
   out[i] = vct_diffuse_irradiance(vct_mips(grid, tp, iso, aniso, sh, shAniso), vct_to_voxels(grid, points[i].xyz),
                                   normals[i].xyz, tp.startOffset, tp.maxDistance, tp.stepFactor, tp.aoLambda,
-                                  tp.footprintInFront);
+                                  tp.footprintInFront, tp.levelSteps);
 }

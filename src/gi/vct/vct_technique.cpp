@@ -18,7 +18,7 @@ namespace {
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
 struct VctTraceParams {
   float startOffset, maxDistance, stepFactor, aoLambda;
-  int32_t anisotropic, applyAo, footprintInFront, pad;
+  int32_t anisotropic, applyAo, footprintInFront, levelSteps;
 };
 static_assert(sizeof(VctTraceParams) == 32, "VctTraceParams layout");
 
@@ -62,6 +62,7 @@ public:
     tp.anisotropic = anisotropic ? 1 : 0;
     tp.applyAo = p.getChoice("vct.ao") == "voxel" ? 1 : 0;
     tp.footprintInFront = p.getBool("vct.footprint_in_front") ? 1 : 0;
+    tp.levelSteps = p.getChoice("vct.diffuse_steps") == "levels" ? 1 : 0;
 
     if (!voxelized_ || !p.getBool("vct.static")) {
       voxels_->voxelize(f.deviceScene);
@@ -104,8 +105,10 @@ public:
       target = &low_;
     }
     diffuse_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, g.width, g.height, lw, lh, g.position, g.normal, g.albedo, *target);
-    int itemsX = (lw + lanes_ - 1) / lanes_;  // GI_VW pixels per work-item
-    f.ctx.launch(diffuse_, cl::NDRange::d2(cl::roundUp(itemsX, 8), cl::roundUp(lh, 8), 8, 8), "vct: diffuse cones");
+    // A tile of GI_VW traced pixels per work-item (VCT_TILE_W × VCT_TILE_H in cone_trace.cl).
+    int tileW = vctDiffuseTileWidth(lanes_), tileH = lanes_ / tileW;
+    int itemsX = (lw + tileW - 1) / tileW, itemsY = (lh + tileH - 1) / tileH;
+    f.ctx.launch(diffuse_, cl::NDRange::d2(cl::roundUp(itemsX, 8), cl::roundUp(itemsY, 8), 8, 8), "vct: diffuse cones");
     if (down > 1) {
       GeometryTest t;
       t.tauZ = p.getFloat("vct.tau_z");
@@ -147,6 +150,10 @@ TechniqueInfo vctTechniqueInfo() {
             p.addChoice("vct.cones", "6", {"6", "9"}, "diffuse cone set: 6 cones (ALGORITHMS §5) or ten Brug's 9 cones; 60° apertures");
             p.addFloat("vct.start_offset", 1.0, 0.0, 16.0, "cone origin offset along the normal, in voxels");
             p.addFloat("vct.step_factor", 0.5, 0.05, 4.0, "march step as a fraction of the cone diameter (at least ½ voxel)");
+            p.addChoice("vct.diffuse_steps", "levels", {"levels", "continuous"},
+                        "diffuse cones: samples where the diameter is a power of two, one mip level each (levels), "
+                        "or steps of step_factor diameters with quadrilinear lookups (continuous; also used with "
+                        "footprint_in_front)");
             p.addFloat("vct.max_distance", 1.0, 0.01, 2.0, "maximum cone length as a fraction of the grid edge");
             p.addBool("vct.specular", true, "trace one specular cone per pixel (aperture tan θ = GGX α)");
             p.addBool("vct.footprint_in_front", false,
