@@ -203,9 +203,13 @@ TEST(ShIgiFilter, MatchesHostMirrorAndNeverMixesAcrossDiscontinuities) {
        alb = ctx.download<glm::vec4>(g.albedo), spec = ctx.download<glm::vec4>(g.specular),
        pos = ctx.download<glm::vec4>(g.position);
   auto inst = ctx.download<uint32_t>(g.instance);
-  cl::Program prog = ctx.buildProgram("kernels/gi/sh_igi/sh_igi.cl", {{"GI_FX", "4"}, {"GI_FY", "4"},
-                                      {"GI_VW", std::to_string(shIgiFilterVectorWidth(ctx))}});
-  cl::Kernel filter = prog.kernel("sh_igi_filter_shade"), filterSeparable = prog.kernel("sh_igi_filter_shade_separable");
+  auto program = [&](bool separable) {
+    return ctx.buildProgram("kernels/gi/sh_igi/sh_igi.cl", {{"GI_FX", "4"}, {"GI_FY", "4"},
+                            {"GI_VW", std::to_string(shIgiFilterVectorWidth(ctx, separable))}});
+  };
+  cl::Program boxProgram = program(false), separableProgram = program(true);
+  cl::Kernel filter = boxProgram.kernel("sh_igi_filter_shade"),
+             filterSeparable = separableProgram.kernel("sh_igi_filter_shade_separable");
   const size_t N = size_t(W) * H;
   cl::Buffer out(ctx, N * 16);
   glm::vec3 eye(g.view.eye[0], g.view.eye[1], g.view.eye[2]);

@@ -14,7 +14,7 @@
 // shared VPL was one scalar load.
 //
 //   sh_igi_vpl_lanes  the VPL lane table: for each lane phase (x0 mod n, y mod m) and iteration k,
-//                    the 10 attributes (position, d_min², normal, flux) of VPL set_l + n·m·k of
+//                    the 10 attributes (position, 1/d_min², normal, flux) of VPL set_l + n·m·k of
 //                    every lane l as GI_VW-wide vectors; lanes whose set has no k-th VPL get a VPL
 //                    of zero flux and normal (weight 0, adds exactly nothing).
 //   sh_igi_project   per pixel x, over its VPL set p:
@@ -71,7 +71,7 @@ inline void sh9_basisV(floatV x, floatV y, floatV z, floatV* b) {
 #define SH_NORMAL (SH_C + 1)
 #define SH_ID (SH_C + 4)
 #define SH_PLANES 32
-#define SH_VPL_ATTRS 10  // lane table: position x, y, z, d_min², normal x, y, z, flux r, g, b
+#define SH_VPL_ATTRS 10  // lane table: position x, y, z, 1/d_min², normal x, y, z, flux r, g, b
 
 // A whole vector of plane slots, stored past the caches on an x86 CPU device (non-temporal): every
 // line of the planes is written whole, once per frame, and not read again before the filter, so
@@ -103,6 +103,19 @@ inline void sh_stream_fence(void) {
 #endif
 }
 
+// 1/√x for x > 0. With AVX-512 (16 lanes, one zmm register) the 14-bit hardware estimate and one
+// Newton step (relative error ≈ 1e-7): PoCL's rsqrt is a square root and a division, and with
+// the distance clamp's division they stalled the projection on the divider (−12 % of its CPU time
+// without them, docs/PERFORMANCE.md, sh-igi, "Eighth round"). Elsewhere the library rsqrt.
+inline floatV sh_rsqrtV(floatV x) {
+#if defined(GI_DEVICE_CPU) && GI_VW == 16 && defined(__AVX512F__)
+  floatV y = __builtin_ia32_rsqrt14ps512_mask(x, (floatV)(0.0f), (ushort)0xffff);
+  return y * fma(-0.5f * x, y * y, (floatV)(1.5f));
+#else
+  return rsqrt(x);
+#endif
+}
+
 // Work-item id -> its first pixel x0 and row y (row-major: the work-items of a row are adjacent).
 inline bool sh_pixels(int width, int height, int* x0, int* y) {
   int columns = (width + GI_VW - 1) / GI_VW, id = get_global_id(0);
@@ -130,7 +143,8 @@ kernel void sh_igi_vpl_lanes(int n, int m, int count, int iterations, global con
       b = vpls[3 * v + 1];
       f = vpls[3 * v + 2];
     }
-    float attr[SH_VPL_ATTRS] = {a.x, a.y, a.z, a.w, b.x, b.y, b.z, f.x, f.y, f.z};
+    // 1/d_min² (+inf for d_min = 0: the clamp never acts), so the projection needs no division.
+    float attr[SH_VPL_ATTRS] = {a.x, a.y, a.z, 1.0f / a.w, b.x, b.y, b.z, f.x, f.y, f.z};
     for (int j = 0; j < SH_VPL_ATTRS; ++j) o[j * GI_VW + l] = attr[j];
   }
 }
@@ -173,25 +187,37 @@ kernel void sh_igi_project(int width, int height, int n, int m, int pitch, int p
   for (int k = 0; k < iterations; ++k, t += SH_VPL_ATTRS * GI_VW) {
     floatV vx = vloadV(0, t) - px, vy = vloadV(1, t) - py, vz = vloadV(2, t) - pz;  // receiver -> VPL
     floatV d2 = vx * vx + vy * vy + vz * vz;
-    floatV invD = rsqrt(fmax(d2, 1e-20f));
+    floatV invD = sh_rsqrtV(fmax(d2, 1e-20f));
     floatV cp = -(vloadV(4, t) * vx + vloadV(5, t) * vy + vloadV(6, t) * vz);  // n_p·(x − x_p) = d · n_p·(−ω)
     floatV front = gx * vx + gy * vy + gz * vz;  // > 0: the VPL is above the geometric tangent plane
-    floatV w = GI_SEL(zero, fmax(cp, 0.0f) * invD / fmax(d2, vloadV(3, t)), front > 0.0f);
+    // 1/max(d², d_min²) = min(1/d², 1/d_min²)
+    floatV w = GI_SEL(zero, fmax(cp, 0.0f) * invD * fmin(invD * invD, vloadV(3, t)), front > 0.0f);
     w = GI_VPL_VISIBLE_LANES(px, py, pz, vloadV(0, t), vloadV(1, t), vloadV(2, t), w);
-    floatV b[SH_N];
-    sh9_basisV(vx * invD, vy * invD, vz * invD, b);
-    floatV fr = vloadV(7, t), fg = vloadV(8, t), fb = vloadV(9, t);
+    // The basis polynomials without their constants (applied once after the loop): 1, y, z, x, xy,
+    // yz, z², xz, x² − y² of ω; Y20 = c·(3z² − 1) is formed from the z² and 1 sums.
+    floatV ox = vx * invD, oy = vy * invD, oz = vz * invD;
+    floatV b[SH_N] = {(floatV)(1.0f), oy, oz, ox, ox * oy, oy * oz, oz * oz, ox * oz, (ox - oy) * (ox + oy)};
+    floatV wr = w * vloadV(7, t), wg = w * vloadV(8, t), wb = w * vloadV(9, t);
+    c[0] += wr;
+    c[SH_N] += wg;
+    c[2 * SH_N] += wb;
 #pragma unroll
-    for (int i = 0; i < SH_N; ++i) {
-      floatV wy = w * b[i];
-      c[i] += fr * wy;
-      c[SH_N + i] += fg * wy;
-      c[2 * SH_N + i] += fb * wy;
+    for (int i = 1; i < SH_N; ++i) {
+      c[i] += wr * b[i];
+      c[SH_N + i] += wg * b[i];
+      c[2 * SH_N + i] += wb * b[i];
     }
   }
   float s = (float)(n * m) * GI_INV_PI;
+  const float basisConstant[SH_N] = {GI_SH_Y0, GI_SH_Y1, GI_SH_Y1, GI_SH_Y1, GI_SH_Y2_PRODUCT, GI_SH_Y2_PRODUCT,
+                                     3.0f * GI_SH_Y20, GI_SH_Y2_PRODUCT, GI_SH_Y22};
 #pragma unroll
-  for (int k = 0; k < SH_C; ++k) c[k] *= s;
+  for (int ch = 0; ch < 3; ++ch) {
+    floatV* cc = c + ch * SH_N;
+    cc[6] -= cc[0] * (1.0f / 3.0f);  // Σ(z² − 1/3) = Σ(3z² − 1) / 3
+#pragma unroll
+    for (int i = 0; i < SH_N; ++i) cc[i] *= basisConstant[i] * s;
+  }
   if (direct) {
     // The punctual lights themselves, per lane (scalar light and shadow-map code of common/).
     for (int li = 0; li < lightCount; ++li) {
@@ -244,6 +270,39 @@ kernel void sh_igi_project(int width, int height, int n, int m, int pitch, int p
 // the SH_FILTER_ROWS + GI_FY − 1 rows their windows cover are kept in private memory (19 KB at 16
 // lanes and GI_FY = 4; with 16 rows the 33 KB no longer fit L1 and it was slower).
 #define SH_FILTER_ROWS 8  // host: kShIgiFilterRows
+
+// Software prefetch on x86 CPU devices (a no-op elsewhere; never faults, so addresses past a
+// buffer are harmless). The filters read 27 coefficient lines and 5 key lines per plane row and
+// 4 G-buffer streams in each of their rows: far more streams than the hardware prefetchers follow,
+// so without it the first touch of every line waited for memory (box filter −18 %, separable
+// −32 % CPU time with it, docs/PERFORMANCE.md, sh-igi, "Eighth round").
+inline __attribute__((always_inline)) void sh_prefetch(global const float* p) {
+#if defined(GI_DEVICE_CPU) && (defined(__x86_64__) || defined(__i386__))
+  __builtin_prefetch((const void*)(size_t)p, 0, 3);
+#endif
+}
+
+// The planes of a row block, SH_PREFETCH_AHEAD floats right of a work-item's first pixel: the line
+// the work-item two further along the row reads first (2·GI_VW + 16 measured 3 % better than 32 at
+// 16 lanes; 32 at 8).
+#define SH_PREFETCH_AHEAD (2 * GI_VW + 16)
+inline __attribute__((always_inline)) void sh_prefetch_block(global const float* base, int pitch) {
+#pragma unroll
+  for (int k = 0; k < SH_PLANES; ++k) sh_prefetch(base + (size_t)k * pitch + SH_PREFETCH_AHEAD);
+}
+
+// The four G-buffer runs (float4 per pixel) that sh_shading reads for GI_VW pixels from (x0, y).
+inline __attribute__((always_inline)) void sh_prefetch_gbuffer(int width, int x0, int y, global const float* gPosition,
+                                                               global const float* gNormal, global const float* gAlbedo,
+                                                               global const float* gSpecular) {
+  size_t at = 4 * ((size_t)y * width + x0);
+  for (int i = 0; i < 4 * GI_VW; i += 16) {
+    sh_prefetch(gPosition + at + i);
+    sh_prefetch(gNormal + at + i);
+    sh_prefetch(gAlbedo + at + i);
+    sh_prefetch(gSpecular + at + i);
+  }
+}
 
 // The filters' helpers are always inlined: PoCL left sh_shading a call (its ShShading through
 // memory), ≈ 30 % of the filters' CPU time in a symbol of its own.
@@ -403,6 +462,7 @@ kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, globa
     int qy = y0 - GI_FY / 2 + r;
     if (qy < 0 || qy >= height) continue;  // never read: no lane accepts a row outside the image
     global const float* base = planes + pad + (size_t)qy * blockSize + x0;
+    sh_prefetch_block(base, pitch);
 #pragma unroll
     for (int k = 0; k < SH_C; ++k) {
       global const float* plane = base + (size_t)k * pitch;
@@ -417,6 +477,9 @@ kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, globa
     if (y >= height) break;
     global const float* base = planes + pad + (size_t)y * blockSize + x0;
     ShKeys c = sh_keys(base, pitch, tauZ);
+    // what the next row (after the last: the next work-item's first) will shade
+    sh_prefetch_gbuffer(width, r + 1 < SH_FILTER_ROWS ? x0 : x0 + GI_VW, r + 1 < SH_FILTER_ROWS ? y + 1 : y0,
+                        gPosition, gNormal, gAlbedo, gSpecular);
     floatV w[GI_FX * GI_FY];
     long off[GI_FX * GI_FY];  // window offset q relative to the work-item's first pixel in row y, in floats
     bool clean[GI_FY], empty[GI_FY];  // window row dy: every lane accepts every offset / none accepts any
@@ -497,6 +560,10 @@ kernel void sh_igi_filter_shade_separable(int width, int height, int pitch, int 
       continue;
     }
     global const float* base = planes + pad + (size_t)qy * blockSize + x0;
+    // sh_prefetch_block written out: through the helper LLVM allocated this kernel's registers
+    // differently and it took 1.2× the CPU time (8 lanes, AVX-512; the box filter is indifferent).
+#pragma unroll
+    for (int k = 0; k < SH_PLANES; ++k) sh_prefetch(base + (size_t)k * pitch + SH_PREFETCH_AHEAD);
     ShKeys c = sh_keys(base, pitch, tauZ);
     floatV w[GI_FX];
     floatV ws = (floatV)(0.0f);
@@ -520,6 +587,9 @@ kernel void sh_igi_filter_shade_separable(int width, int height, int pitch, int 
     if (y >= height) break;
     global const float* base = planes + pad + (size_t)y * blockSize + x0;
     ShKeys c = sh_keys(base, pitch, tauZ);
+    // what the next row (after the last: the next work-item's first) will shade
+    sh_prefetch_gbuffer(width, r + 1 < SH_FILTER_ROWS ? x0 : x0 + GI_VW, r + 1 < SH_FILTER_ROWS ? y + 1 : y0,
+                        gPosition, gNormal, gAlbedo, gSpecular);
     floatV w[GI_FY];
     floatV ws = (floatV)(0.0f);
 #pragma unroll

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 
+#include "cl/gather_width.h"
 #include "gi/vpl/vpl_lights.h"
 #include "gi/vpl/vpl_visibility.h"
 
@@ -76,7 +77,7 @@ public:
 
 private:
   struct Programs {
-    cl::Program program, visibleProgram, filterProgram;
+    cl::Program program, visibleProgram, filterProgram, separableProgram;
     cl::Kernel vplLanes, project, projectVisible, filter, filterSeparable;
   };
   // One program per filter window (compile-time GI_FX, GI_FY); the visibility variant of the
@@ -90,11 +91,15 @@ private:
                                      {{"GI_FX", std::to_string(fx)}, {"GI_FY", std::to_string(fy)}, {"GI_VW", std::to_string(shIgiVectorWidth(f.ctx))}});
       p.project = p.program.kernel("sh_igi_project");
       p.vplLanes = p.program.kernel("sh_igi_vpl_lanes");
-      p.filterProgram = f.ctx.buildProgram("kernels/gi/sh_igi/sh_igi.cl",
-                                           {{"GI_FX", std::to_string(fx)}, {"GI_FY", std::to_string(fy)},
-                                            {"GI_VW", std::to_string(shIgiFilterVectorWidth(f.ctx))}});
+      auto filterProgram = [&](bool separable) {
+        return f.ctx.buildProgram("kernels/gi/sh_igi/sh_igi.cl",
+                                  {{"GI_FX", std::to_string(fx)}, {"GI_FY", std::to_string(fy)},
+                                   {"GI_VW", std::to_string(shIgiFilterVectorWidth(f.ctx, separable))}});
+      };
+      p.filterProgram = filterProgram(false);
+      p.separableProgram = filterProgram(true);
       p.filter = p.filterProgram.kernel("sh_igi_filter_shade");
-      p.filterSeparable = p.filterProgram.kernel("sh_igi_filter_shade_separable");
+      p.filterSeparable = p.separableProgram.kernel("sh_igi_filter_shade_separable");
       it = programs_.emplace(key, std::move(p)).first;
     }
     Programs& p = it->second;
@@ -122,10 +127,15 @@ private:
 // time and the filter the same (perf samples, same load).
 int shIgiVectorWidth(const cl::Context& ctx) { return ctx.vectorWidth(); }
 
-// The filters with 8 lanes on a 16-lane CPU device: the separable filter's CPU time fell to 0.6×
-// (its private row pass, 11 rows × 27 planes, is half the size), the box filter's stayed the same;
-// the projection with 8 lanes took 2.2× its time (docs/PERFORMANCE.md, sh-igi, "Sixth round").
-int shIgiFilterVectorWidth(const cl::Context& ctx) { return std::min(8, ctx.vectorWidth()); }
+// The separable filter with 8 lanes on a 16-lane CPU device: its CPU time fell to 0.6× on AVX2 (its
+// private row pass, 11 rows × 27 planes, is half the size; the projection with 8 lanes took 2.2×
+// its time, docs/PERFORMANCE.md, sh-igi, "Sixth round") and it is 0.75× on AVX-512. The box filter
+// takes the width of the gathers (cl/gather_width.h: 16 lanes where the CPU's native float vector
+// is 16 wide, i.e. AVX-512, else 8): the same CPU time at 8 and 16 lanes on AVX2, 0.85× with 16 on
+// AVX-512 ("Eighth round"). $GI_VECTOR_WIDTH caps both.
+int shIgiFilterVectorWidth(const cl::Context& ctx, bool separable) {
+  return std::min(separable ? 8 : cl::gatherVectorWidth(ctx), ctx.vectorWidth());
+}
 
 cl::NDRange shIgiRange(const cl::Context& ctx, const ShIgiPlanes& l) {
   const size_t columns = size_t(l.width + shIgiVectorWidth(ctx) - 1) / size_t(shIgiVectorWidth(ctx));
@@ -146,7 +156,8 @@ void shIgiFilterShade(cl::Context& ctx, cl::Kernel& filter, bool separable, cons
   filter.args(l.width, l.height, l.pitch, l.pad, planes, g.position, g.normal, g.albedo, g.specular, g.view, tauZ,
               cosTauN, int(sameInstance), int(glossy), out);
   // GI_VW pixels of kShIgiFilterRows rows per work-item, row-major.
-  const size_t columns = size_t(l.width + shIgiFilterVectorWidth(ctx) - 1) / size_t(shIgiFilterVectorWidth(ctx));
+  const int lanes = shIgiFilterVectorWidth(ctx, separable);
+  const size_t columns = size_t(l.width + lanes - 1) / size_t(lanes);
   const size_t blocks = size_t(l.height + kShIgiFilterRows - 1) / kShIgiFilterRows;
   ctx.launch(filter, cl::NDRange::d1(cl::roundUp(columns * blocks, 4), 4),
              label + (separable ? ": filter + shade (separable)" : ": filter + shade"));

@@ -27,13 +27,14 @@ struct ShIgiPlanes {
 
 // GI_VW of the sh-igi projection program (and of its VPL lane table), and its launch range over a
 // layout (sh_pixels in the kernels: GI_VW consecutive pixels of one camera row per work-item,
-// row-major). The filters are built with shIgiFilterVectorWidth: at most 8 lanes.
+// row-major). The filters are built with shIgiFilterVectorWidth: the box filter with 16 lanes
+// where the CPU has AVX-512 (8 with AVX2), the separable one with at most 8.
 int shIgiVectorWidth(const cl::Context& ctx);
-int shIgiFilterVectorWidth(const cl::Context& ctx);
+int shIgiFilterVectorWidth(const cl::Context& ctx, bool separable);
 cl::NDRange shIgiRange(const cl::Context& ctx, const ShIgiPlanes& layout);
 
 // The filter and shading kernel of a program built with GI_FX = fx, GI_FY = fy and GI_VW =
-// shIgiFilterVectorWidth — sh_igi_filter_shade (box) or, with `separable`, sh_igi_filter_shade_separable,
+// shIgiFilterVectorWidth(ctx, separable) — sh_igi_filter_shade (box) or, with `separable`, sh_igi_filter_shade_separable,
 // both SH_FILTER_ROWS = kShIgiFilterRows rows per work-item — launched over `planes` whose
 // coefficient and key planes are filled, into `out` (float4 radiance per camera pixel).
 constexpr int kShIgiFilterRows = 8;
