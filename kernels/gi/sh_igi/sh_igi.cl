@@ -292,13 +292,11 @@ inline __attribute__((always_inline)) void sh_prefetch_block(global const float*
   for (int k = 0; k < SH_PLANES; ++k) sh_prefetch(base + (size_t)k * pitch + SH_PREFETCH_AHEAD);
 }
 
-// The four G-buffer runs (float4 per pixel) that sh_shading reads for GI_VW pixels from (x0, y).
-inline __attribute__((always_inline)) void sh_prefetch_gbuffer(int width, int x0, int y, global const float* gPosition,
-                                                               global const float* gNormal, global const float* gAlbedo,
-                                                               global const float* gSpecular) {
+// The three G-buffer runs (float4 per pixel) that sh_shading reads for GI_VW pixels from (x0, y).
+inline __attribute__((always_inline)) void sh_prefetch_gbuffer(int width, int x0, int y, global const float* gNormal,
+                                                               global const float* gAlbedo, global const float* gSpecular) {
   size_t at = 4 * ((size_t)y * width + x0);
   for (int i = 0; i < 4 * GI_VW; i += 16) {
-    sh_prefetch(gPosition + at + i);
     sh_prefetch(gNormal + at + i);
     sh_prefetch(gAlbedo + at + i);
     sh_prefetch(gSpecular + at + i);
@@ -354,27 +352,25 @@ typedef struct {
 
 #define SH_BAND(k) ((k) == 0 ? 0 : (k) < 4 ? 1 : 2)
 
-inline __attribute__((always_inline)) void sh_shading(int width, int x0, int y, uintV id, global const float* gPosition, global const float* gNormal,
+inline __attribute__((always_inline)) void sh_shading(int width, int x0, int y, uintV id, global const float* gNormal,
                        global const float* gAlbedo, global const float* gSpecular, GiView camera, int glossy,
                        ShShading* s) {
   intV x = x0 + GI_LANES;
   intV inside = x < width;
   size_t row = (size_t)y * width;
-  float3V p, nrm;
-  floatV pw, unused, roughness;
+  float3V nrm;
+  floatV unused, roughness;
   if (x0 + GI_VW <= width) {
-    GI_AOS4_LOAD(gPosition + 4 * (row + x0), p.x, p.y, p.z, pw)
     GI_AOS4_LOAD(gNormal + 4 * (row + x0), nrm.x, nrm.y, nrm.z, unused)
     GI_AOS4_LOAD(gAlbedo + 4 * (row + x0), s->alb.x, s->alb.y, s->alb.z, unused)
     GI_AOS4_LOAD(gSpecular + 4 * (row + x0), s->f0.x, s->f0.y, s->f0.z, roughness)
   } else {
     intV i = (int)row + min(x, width - 1);
-    GI_GATHER_AOS4(float, gPosition, i, p.x, p.y, p.z, pw)
     GI_GATHER_AOS4(float, gNormal, i, nrm.x, nrm.y, nrm.z, unused)
     GI_GATHER_AOS4(float, gAlbedo, i, s->alb.x, s->alb.y, s->alb.z, unused)
     GI_GATHER_AOS4(float, gSpecular, i, s->f0.x, s->f0.y, s->f0.z, roughness)
   }
-  s->surface = (id != GI_INVALID_ID) & (pw != 0.0f) & inside;
+  s->surface = (id != GI_INVALID_ID) & inside;
   sh9_basisV(nrm.x, nrm.y, nrm.z, s->tn);
   const float lambert[3] = {GI_SH_COSCONV0, GI_SH_COSCONV1, GI_SH_COSCONV2};
 #pragma unroll
@@ -385,7 +381,18 @@ inline __attribute__((always_inline)) void sh_shading(int width, int x0, int y, 
       float3 v = -normalize(mat4_mul(camera.inv_view_proj, (float4)(0.0f, 0.0f, 1.0f, 0.0f)).xyz);
       wo = f3v((floatV)(v.x), (floatV)(v.y), (floatV)(v.z));
     } else {
-      wo = safe_normalizeV(f3v(camera.eye[0] - p.x, camera.eye[1] - p.y, camera.eye[2] - p.z), nrm);
+      // The G-buffer's position is eye + t·d on the ray through the pixel centre (raster/gbuffer.cl),
+      // so the view vector is −d: from the camera, without reading the position run.
+      floatV ndcX = (convert_floatV(x) + 0.5f) / (float)camera.width * 2.0f - 1.0f;
+      float ndcY = 1.0f - ((float)y + 0.5f) / (float)camera.height * 2.0f;
+      const float* M = camera.inv_view_proj;
+#define SH_UNPROJECT(r, zs) (M[r] * ndcX + (M[4 + r] * ndcY + M[8 + r] * (zs) + M[12 + r]))
+      floatV invNear = 1.0f / SH_UNPROJECT(3, -1.0f), invFar = 1.0f / SH_UNPROJECT(3, 1.0f);
+      float3V d = f3v(SH_UNPROJECT(0, 1.0f) * invFar - SH_UNPROJECT(0, -1.0f) * invNear,
+                      SH_UNPROJECT(1, 1.0f) * invFar - SH_UNPROJECT(1, -1.0f) * invNear,
+                      SH_UNPROJECT(2, 1.0f) * invFar - SH_UNPROJECT(2, -1.0f) * invNear);
+#undef SH_UNPROJECT
+      wo = safe_normalizeV(f3v(-d.x, -d.y, -d.z), nrm);
     }
     floatV nv = dotV(nrm, wo);
     float3V rv = f3v(2.0f * nv * nrm.x - wo.x, 2.0f * nv * nrm.y - wo.y, 2.0f * nv * nrm.z - wo.z);
@@ -446,7 +453,7 @@ inline __attribute__((always_inline)) void sh_write(const ShShading* s, const fl
 // offsets where no test rejects. Channel by channel, 9 accumulators live, folded into the zonal
 // shading sums.
 kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, global const float* planes,
-                                global const float* gPosition, global const float* gNormal,
+                                global const float* gNormal,
                                 global const float* gAlbedo, global const float* gSpecular, GiView camera,
                                 float tauZ, float cosTauN, int sameInstance, int glossy, global float* out) {
   int columns = (width + GI_VW - 1) / GI_VW, id = get_global_id(0);
@@ -480,7 +487,7 @@ kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, globa
     ShKeys c = sh_keys(base, pitch, tauZ);
     // what the next row (after the last: the next work-item's first) will shade
     sh_prefetch_gbuffer(width, r + 1 < SH_FILTER_ROWS ? x0 : x0 + GI_VW, r + 1 < SH_FILTER_ROWS ? y + 1 : y0,
-                        gPosition, gNormal, gAlbedo, gSpecular);
+                        gNormal, gAlbedo, gSpecular);
     floatV w[GI_FX * GI_FY];
     long off[GI_FX * GI_FY];  // window offset q relative to the work-item's first pixel in row y, in floats
     bool clean[GI_FY], empty[GI_FY];  // window row dy: every lane accepts every offset / none accepts any
@@ -505,7 +512,7 @@ kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, globa
     // The centre pixel always passes its own test unless it is background; ws = 0 only there.
     floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
     ShShading s;
-    sh_shading(width, x0, y, c.id, gPosition, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
+    sh_shading(width, x0, y, c.id, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
     floatV diffuse[3], specular[3];
     for (int ch = 0; ch < 3; ++ch) {
       global const float* channel = base + (size_t)ch * SH_N * pitch;
@@ -543,7 +550,7 @@ kernel void sh_igi_filter_shade(int width, int height, int pitch, int pad, globa
 // covers the SH_FILTER_ROWS + GI_FY − 1 rows its column passes read and keeps them in private
 // memory.
 kernel void sh_igi_filter_shade_separable(int width, int height, int pitch, int pad, global const float* planes,
-                                          global const float* gPosition, global const float* gNormal,
+                                          global const float* gNormal,
                                           global const float* gAlbedo, global const float* gSpecular,
                                           GiView camera, float tauZ, float cosTauN, int sameInstance, int glossy,
                                           global float* out) {
@@ -590,7 +597,7 @@ kernel void sh_igi_filter_shade_separable(int width, int height, int pitch, int 
     ShKeys c = sh_keys(base, pitch, tauZ);
     // what the next row (after the last: the next work-item's first) will shade
     sh_prefetch_gbuffer(width, r + 1 < SH_FILTER_ROWS ? x0 : x0 + GI_VW, r + 1 < SH_FILTER_ROWS ? y + 1 : y0,
-                        gPosition, gNormal, gAlbedo, gSpecular);
+                        gNormal, gAlbedo, gSpecular);
     floatV w[GI_FY];
     floatV ws = (floatV)(0.0f);
 #pragma unroll
@@ -603,7 +610,7 @@ kernel void sh_igi_filter_shade_separable(int width, int height, int pitch, int 
     }
     floatV inv = GI_SEL((floatV)(0.0f), 1.0f / ws, ws > 0.0f);
     ShShading s;
-    sh_shading(width, x0, y, c.id, gPosition, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
+    sh_shading(width, x0, y, c.id, gNormal, gAlbedo, gSpecular, camera, glossy, &s);
     floatV diffuse[3], specular[3];
     for (int ch = 0; ch < 3; ++ch) {
       floatV acc[SH_N];

@@ -153,7 +153,7 @@ ShIgiPlanes::ShIgiPlanes(int width, int height) : width(width), height(height) {
 void shIgiFilterShade(cl::Context& ctx, cl::Kernel& filter, bool separable, const ShIgiPlanes& l, const GBuffer& g,
                       const cl::Buffer& planes, float tauZ, float cosTauN, bool sameInstance, bool glossy,
                       cl::Buffer& out, const std::string& label) {
-  filter.args(l.width, l.height, l.pitch, l.pad, planes, g.position, g.normal, g.albedo, g.specular, g.view, tauZ,
+  filter.args(l.width, l.height, l.pitch, l.pad, planes, g.normal, g.albedo, g.specular, g.view, tauZ,
               cosTauN, int(sameInstance), int(glossy), out);
   // GI_VW pixels of kShIgiFilterRows rows per work-item, row-major.
   const int lanes = shIgiFilterVectorWidth(ctx, separable);
