@@ -171,7 +171,7 @@ kernel void sh_igi_project(int width, int height, int n, int m, int pitch, int p
     z = vloadV(0, depth + row + x0);
     id = vloadV(0, instance + row + x0);
   } else {  // the row's last pixels: lanes past it repeat its last pixel, with the invalid id
-    intV i = (int)row + min(x, width - 1);
+    intV i = (int)row + min(x, (intV)(width - 1));
     GI_GATHER_AOS4(float, position, i, px, py, pz, pw)
     GI_GATHER_AOS4(float, geoNormal, i, nx, ny, nz, nw)
     z = GI_GATHER(floatV, depth, i);
@@ -365,7 +365,7 @@ inline __attribute__((always_inline)) void sh_shading(int width, int x0, int y, 
     GI_AOS4_LOAD(gAlbedo + 4 * (row + x0), s->alb.x, s->alb.y, s->alb.z, unused)
     GI_AOS4_LOAD(gSpecular + 4 * (row + x0), s->f0.x, s->f0.y, s->f0.z, roughness)
   } else {
-    intV i = (int)row + min(x, width - 1);
+    intV i = (int)row + min(x, (intV)(width - 1));
     GI_GATHER_AOS4(float, gNormal, i, nrm.x, nrm.y, nrm.z, unused)
     GI_GATHER_AOS4(float, gAlbedo, i, s->alb.x, s->alb.y, s->alb.z, unused)
     GI_GATHER_AOS4(float, gSpecular, i, s->f0.x, s->f0.y, s->f0.z, roughness)
