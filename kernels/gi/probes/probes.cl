@@ -258,8 +258,9 @@ __attribute__((always_inline)) inline void probe_octahedral_footprintV(floatV dx
   // fx, fy > −1 for every direction (|q| <= 1 up to rounding), where truncation and the clamp to
   // 0 … res give floor's texel; a NaN direction (background lanes) converts to some integer that
   // the clamp puts in range (its result is not stored).
-  intV x0 = clamp(convert_intV(fx), 0, res);
-  intV y0 = clamp(convert_intV(fy), 0, res);
+  // (Vector bounds: oclgrind mis-evaluates min/max/clamp of an integer vector with scalar bounds.)
+  intV x0 = clamp(convert_intV(fx), (intV)(0), (intV)(res));
+  intV y0 = clamp(convert_intV(fy), (intV)(0), (intV)(res));
   *tx = clamp(fx - convert_floatV(x0), 0.0f, 1.0f);
   *ty = clamp(fy - convert_floatV(y0), 0.0f, 1.0f);
   *offset = y0 * (res + 2) + x0;
@@ -501,9 +502,10 @@ __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiPr
   b.xb = f3v(x.x + ng.x * g->normal_bias + wo.x * g->view_bias, x.y + ng.y * g->normal_bias + wo.y * g->view_bias,
              x.z + ng.z * g->normal_bias + wo.z * g->view_bias);
   floatV rx = (b.xb.x - ox) / sx, ry = (b.xb.y - oy) / sy, rz = (b.xb.z - oz) / sz;
-  intV bx = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rx), rx == rx)), 0, max(cx - 2, 0));
-  intV by = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(ry), ry == ry)), 0, max(cy - 2, 0));
-  intV bz = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rz), rz == rz)), 0, max(cz - 2, 0));
+  intV zeroI = (intV)(0);
+  intV bx = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rx), rx == rx)), zeroI, (intV)(max(cx - 2, 0)));
+  intV by = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(ry), ry == ry)), zeroI, (intV)(max(cy - 2, 0)));
+  intV bz = clamp(convert_intV(GI_SEL((floatV)(0.0f), floor(rz), rz == rz)), zeroI, (intV)(max(cz - 2, 0)));
   floatV ax = clamp(rx - convert_floatV(bx), 0.0f, 1.0f), ay = clamp(ry - convert_floatV(by), 0.0f, 1.0f),
          az = clamp(rz - convert_floatV(bz), 0.0f, 1.0f);
   floatV itx, ity;
@@ -581,7 +583,7 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   // Camera pixel of each lane (lanes past the image's edge repeat its last pixel).
   intV u = min((intV)(u0) + ((intV)(GI_LANES) & (tileW - 1)), (intV)(lw - 1));
   intV v = min((intV)(v0) + ((intV)(GI_LANES) >> shift), (intV)(lh - 1));
-  intV i = min(v * down, camera.height - 1) * camera.width + min(u * down, camera.width - 1);
+  intV i = min(v * down, (intV)(camera.height - 1)) * camera.width + min(u * down, (intV)(camera.width - 1));
   global const float* P = (global const float*)gPosition;
   global const float* G = (global const float*)gGeoNormal;
   global const float* N = (global const float*)gNormal;
