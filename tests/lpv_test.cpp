@@ -2,6 +2,11 @@
 // (tests/lpv_host_reference.h) on 8³ grids with 2 cascades; energy bookkeeping of propagation
 // against the analytic face solid angles; blocking by a wall in the geometry volume; determinism.
 // ALGORITHMS.md §4, §7; docs/techniques/lpv.md.
+// The injection, surfel and lookup kernels work on GI_VW (1, 8 or 16) texels or pixels of a row at
+// a time and on runs of 16 (LpvVolume::kRunLength): their tests use row lengths that are multiples
+// of neither (19 merged RSM texels, 19 RSM and 27 camera pixels), so that the lanes past a row's
+// end, which re-read its last texel and must be dropped, are exercised at every width (run them
+// under Oclgrind to check that no lane reads or writes outside the buffers: README, "Development notes").
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -115,7 +120,7 @@ TEST(LpvSh, ClampedCosineProjectionAndEvaluation) {
 
 TEST(LpvKernels, InjectionMatchesHost) {
   cl::Context& ctx = test::context();
-  const int res = 16, block = 2;
+  const int res = 38, block = 2;  // 19 merged texels per row: a full run of 16 and a partial one
   const float bias = 0.5f, scale = float(std::ldexp(1.0, 40));
   Planes p = randomPlanes(res, 7);
   LpvVolume v(ctx, kN, 2);
@@ -162,9 +167,9 @@ TEST(LpvKernels, InjectionMatchesHost) {
 
 TEST(LpvKernels, GeometryVolumeMatchesHost) {
   cl::Context& ctx = test::context();
-  const int w = 32, h = 16, rsmRes = 16;
+  const int w = 27, h = 16, rsmRes = 19;  // rows of neither a multiple of the lane count nor of the run
   Planes camera;
-  Planes all = randomPlanes(32, 11);  // 1024 surfels: the first 512 are the camera's, the rest the RSM's
+  Planes all = randomPlanes(32, 11);  // 1024 surfels: the first w·h are the camera's, the next rsmRes² the RSM's
   for (int i = 0; i < w * h; ++i) {
     camera.position.push_back(all.position[i]);
     camera.normal.push_back(all.normal[i]);
@@ -277,7 +282,7 @@ TEST(LpvKernels, PropagationMatchesHost16) { propagationMatchesHost(16); }
 void lookupMatchesHost(LpvLookupStorage storage, int steps = 0) {
   cl::Context& ctx = test::context();
   if (storage == LpvLookupStorage::Image) ASSERT_TRUE(ctx.device().imageSupport) << "the test device has no images";
-  const int w = 32, h = 16;
+  const int w = 27, h = 16;  // rows end inside a work-item's lanes: their last lanes must not be stored
   lpvref::Grid g = randomGrid(9);
   Planes p = randomPlanes(32, 13);
   p.position.resize(size_t(w) * h);

@@ -51,6 +51,17 @@
 // The propagation works on LPV_LANES cells of a row per work-item, the injection and surfel
 // kernels on GI_VW texels at a time (the native float width on CPU devices: 16 with AVX-512, 8
 // with AVX2; 1 on GPUs), the lane-wise convention of common/vector_width.h.
+// Two forms are avoided so that the kernels run correctly under Oclgrind (README, "Development
+// notes"), which mis-evaluates them; both are correct OpenCL, and the forms used instead compile
+// to the same code on PoCL:
+//  - integer min/max of a lane vector and a scalar, min(x, n): written min(x, (intV)(n)). Oclgrind
+//    21.10 evaluates the integer min/max/clamp(gentype, sgentype) overloads as if the scalar were
+//    a vector (lane i read from past its storage): lanes 1.. got garbage clamped indices, so it
+//    reported invalid reads in lpv_inject, lpv_geometry_* and lpv_lookup that no device makes;
+//  - `!` of a vector comparison, e.g. `m && !(a == b)`: written as the opposite comparison,
+//    `m && a != b`. Oclgrind turns !(a == b) into 1 / −2 per lane instead of 0 / −1 (it mis-
+//    evaluates the xor with an i1 `true` vector of its lowering), so lpv_lookup's loop over the
+//    distinct cells never ended there and grew until the memory ran out.
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #include "common/math.h"
 #include "common/sh.h"
@@ -156,7 +167,7 @@ kernel void lpv_inject(global const float4* rsmPosition, global const float4* rs
   }
   for (int chunk = 0; chunk < LPV_RUN / GI_VW; ++chunk) {
     intV x = x0 + chunk * GI_VW + GI_LANES;
-    intV column = min(x, mergedRes - 1) * block;  // lanes past the row's end re-read its last texel, dropped below
+    intV column = min(x, (intV)(mergedRes - 1)) * block;  // lanes past the row's end re-read its last texel, dropped below
     floatV fr = 0.0f, fg = 0.0f, fb = 0.0f, px = 0.0f, py = 0.0f, pz = 0.0f, nx = 0.0f, ny = 0.0f, nz = 0.0f;
     floatV weight = 0.0f;
     for (int by = 0; by < block; ++by)
@@ -256,7 +267,7 @@ inline void add_surfels(const GiView* view, global const float4* position, globa
   const float texelArea = view->texel_world_size * view->texel_world_size;
   for (int chunk = 0; chunk < LPV_RUN / GI_VW; ++chunk) {
     intV x = x0 + chunk * GI_VW + GI_LANES;
-    intV texel = y * width + min(x, width - 1);  // lanes past the row's end re-read its last texel, dropped below
+    intV texel = y * width + min(x, (intV)(width - 1));  // lanes past the row's end re-read its last texel, dropped below
     floatV px, py, pz, pw, nx, ny, nz, nw;
     GI_GATHER_AOS4(float, (global const float*)position, texel, px, py, pz, pw);
     GI_GATHER_AOS4(float, (global const float*)normal, texel, nx, ny, nz, nw);
@@ -761,8 +772,8 @@ __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID gr
   for (int ch = 0; ch < 3; ++ch)
     e[ch] = vloadV(0, q[ch][0]) - vloadV(0, q[ch][1]) * n.y - vloadV(0, q[ch][2]) * n.z - vloadV(0, q[ch][3]) * n.x;
 #else
-  intV cx = min(convert_intV(floor(ux)), LPV_N - 2), cy = min(convert_intV(floor(uy)), LPV_N - 2),
-       cz = min(convert_intV(floor(uz)), LPV_N - 2);
+  intV cx = min(convert_intV(floor(ux)), (intV)(LPV_N - 2)), cy = min(convert_intV(floor(uy)), (intV)(LPV_N - 2)),
+       cz = min(convert_intV(floor(uz)), (intV)(LPV_N - 2));
   floatV fx = ux - convert_floatV(cx), fy = uy - convert_floatV(cy), fz = uz - convert_floatV(cz);
   floatV gx = 1.0f - fx, gy = 1.0f - fy, gz = 1.0f - fz;
   const floatV weight[8] = {gx * gy * gz, fx * gy * gz, gx * fy * gz, fx * fy * gz,
@@ -779,7 +790,7 @@ __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID gr
   while (GI_ANY(todo)) {
     int base = lpv_min_lane(GI_SEL((intV)(INT_MAX), cell, todo));
     intV mine = cell == base;
-    todo = todo && !mine;
+    todo = todo && cell != base;  // not `todo && !mine`: see the top of the file
 #pragma unroll
     for (int ch = 0; ch < 3; ++ch) {
       global const float4* g = grid + LPV_LOOKUP_AT(0, ch, base);
@@ -815,7 +826,7 @@ kernel void lpv_lookup(int width, int height, global const float* position, glob
   int x0 = get_global_id(0) * GI_VW, y = get_global_id(1);
   if (x0 >= width || y >= height) return;
   intV x = x0 + GI_LANES;
-  intV pixel = y * width + min(x, width - 1);  // lanes past the row's end re-read its last pixel, not stored
+  intV pixel = y * width + min(x, (intV)(width - 1));  // lanes past the row's end re-read its last pixel, not stored
   float3V p, ng, n, rho;
   floatV pw, unused;
   GI_GATHER_AOS4(float, position, pixel, p.x, p.y, p.z, pw);
@@ -840,7 +851,7 @@ kernel void lpv_lookup(int width, int height, global const float* position, glob
   cascade_irradiance(grid, cascades, k, p, ng, n, e);
   if (GI_ANY(a > 0.0f)) {
     floatV coarse[3];
-    cascade_irradiance(grid, cascades, min(k + 1, LPV_CASCADES - 1), p, ng, n, coarse);
+    cascade_irradiance(grid, cascades, min(k + 1, (intV)(LPV_CASCADES - 1)), p, ng, n, coarse);
 #pragma unroll
     for (int ch = 0; ch < 3; ++ch) e[ch] = mix(e[ch], coarse[ch], a);
   }
