@@ -1215,7 +1215,7 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
           tp.applyAo = variant > 0;
           tp.aoLambda = 0.1f;
           diffuse.args(g, tp, vs.iso(), aniso, shIso, shAniso, W, H, W, H, bPos, bNrm, bAlb, lanesOut);
-          int tileW = vctDiffuseTileWidth(lanes), tileH = lanes / tileW;
+          int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
           ctx.launch(diffuse, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8),
                                               cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
           points.args(g, tp, vs.iso(), aniso, shIso, shAniso, bPos, bNrm, count, scalarOut);
@@ -1301,7 +1301,8 @@ TEST(VctCone, SpecularLanesMatchOneConeAtATime) {
     cl::Kernel k = prog.kernel("vct_specular");
     cl::Buffer out = ctx.upload(base, "indirect");
     k.args(g, tp, vs.iso(), vs.aniso(), vs.iso(), vs.iso(), cam, bPos, bNrm, bSpec, out);
-    ctx.launch(k, cl::NDRange::d2(cl::roundUp((W + lanes - 1) / lanes, 8), 8, 8, 8));
+    int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
+    ctx.launch(k, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8), cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
     std::vector<glm::vec4> got = ctx.download<glm::vec4>(out);
     ctx.profiler().discard();
     std::vector<glm::vec4> expected = base;

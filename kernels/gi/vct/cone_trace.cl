@@ -9,7 +9,7 @@
 //               a tile of GI_VW traced pixels per work-item (VCT_TILE_W × VCT_TILE_H, cone_lanes.h).
 //               GI_DOWN = 1 writes L = ρ/π · E (· voxel AO visibility if asked) per pixel;
 //               GI_DOWN > 1 writes E for the geometry-aware upsampler (filters/discontinuity.cl).
-// vct_specular  per pixel (GI_VW per work-item, cone_lanes.h): adds F_Schlick(F0, n·ωo) · L_cone
+// vct_specular  per pixel (a tile of GI_VW per work-item, cone_lanes.h): adds F_Schlick(F0, n·ωo) · L_cone
 //               along the mirror direction, the cone's half-angle from the GGX width, tan θ = α
 //               (α = roughness²). The BRDF's directional albedo is approximated by F(n·ωo) alone
 //               (no masking term).
@@ -52,10 +52,12 @@ inline VoxelMips vct_mips(GiVoxelGrid g, VctTraceParams tp, global const float4*
 
 #define VCT_MIP_ARGS global const float4 *iso, global const float4 *aniso, global const float4 *sh, global const float4 *shAniso
 
-// vct_diffuse's lanes are a tile of VCT_TILE_W × VCT_TILE_H traced pixels (4×4 for 16 lanes, 4×2 for
-// 8): neighbouring pixels' cones read the same cells of the coarse levels more often than those of
-// a row of GI_VW pixels, and such lookups are shared (vox_level_sample_uniform_lanes). The host
-// launches ⌈lowWidth / VCT_TILE_W⌉ × ⌈lowHeight / VCT_TILE_H⌉ work-items.
+// vct_diffuse's and vct_specular's lanes are a tile of VCT_TILE_W × VCT_TILE_H (traced) pixels (4×4
+// for 16 lanes, 4×2 for 8): neighbouring pixels' diffuse cones read the same cells of the coarse
+// levels more often than those of a row of GI_VW pixels, and such lookups are shared
+// (vox_level_sample_uniform_lanes); neighbouring specular cones have more similar apertures and
+// lengths. The host launches ⌈width / VCT_TILE_W⌉ × ⌈height / VCT_TILE_H⌉ work-items
+// (vctLaneTileWidth in src/gi/vct/vct_technique.h).
 #if GI_VW >= 8
 #define VCT_TILE_W 4
 #else
@@ -112,10 +114,10 @@ kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int w
 kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiView camera,
                          global const float4* gPosition, global const float4* gNormal,
                          global const float4* gSpecular, global float4* out) {
-  int gx = get_global_id(0), y = get_global_id(1);
-  int x0 = gx * GI_VW;
-  if (x0 >= camera.width || y >= camera.height) return;
-  intV q = (intV)(y * camera.width) + min(x0 + GI_LANES, camera.width - 1);
+  int x0 = get_global_id(0) * VCT_TILE_W, y0 = get_global_id(1) * VCT_TILE_H;
+  if (x0 >= camera.width || y0 >= camera.height) return;
+  intV q = min(y0 + GI_LANES / VCT_TILE_W, camera.height - 1) * camera.width +
+           min(x0 + GI_LANES % VCT_TILE_W, camera.width - 1);
   floatV px, py, pz, pw, nx, ny, nz, nw, f0r, f0g, f0b, roughness;
   GI_GATHER_AOS4(float, (global const float*)gPosition, q, px, py, pz, pw)
   GI_GATHER_AOS4(float, (global const float*)gNormal, q, nx, ny, nz, nw)
@@ -147,8 +149,11 @@ kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiVi
   vstoreV((f0g + (1.0f - f0g) * m5) * c.g, 0, vals[1]);
   vstoreV((f0b + (1.0f - f0b) * m5) * c.b, 0, vals[2]);
   vstoreV(GI_SEL((floatV)(0.0f), (floatV)(1.0f), active), 0, vals[3]);
-  for (int l = 0; l < GI_VW && x0 + l < camera.width; ++l)
-    if (vals[3][l] != 0.0f) out[(size_t)y * camera.width + x0 + l].xyz += (float3)(vals[0][l], vals[1][l], vals[2][l]);
+  for (int l = 0; l < GI_VW; ++l) {
+    int xl = x0 + l % VCT_TILE_W, yl = y0 + l / VCT_TILE_W;
+    if (vals[3][l] != 0.0f && xl < camera.width && yl < camera.height)
+      out[(size_t)yl * camera.width + xl].xyz += (float3)(vals[0][l], vals[1][l], vals[2][l]);
+  }
 }
 
 kernel void vct_bounce(GiVoxelGrid grid, VctTraceParams tp, global const uint* acc, global const float4* direct,

@@ -106,7 +106,7 @@ public:
     }
     diffuse_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, g.width, g.height, lw, lh, g.position, g.normal, g.albedo, *target);
     // A tile of GI_VW traced pixels per work-item (VCT_TILE_W × VCT_TILE_H in cone_trace.cl).
-    int tileW = vctDiffuseTileWidth(lanes_), tileH = lanes_ / tileW;
+    int tileW = vctLaneTileWidth(lanes_), tileH = lanes_ / tileW;
     int itemsX = (lw + tileW - 1) / tileW, itemsY = (lh + tileH - 1) / tileH;
     f.ctx.launch(diffuse_, cl::NDRange::d2(cl::roundUp(itemsX, 8), cl::roundUp(itemsY, 8), 8, 8), "vct: diffuse cones");
     if (down > 1) {
@@ -117,8 +117,9 @@ public:
     }
     if (p.getBool("vct.specular")) {
       specular_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, g.view, g.position, g.normal, g.specular, indirect);
-      int items = (g.width + lanes_ - 1) / lanes_;
-      f.ctx.launch(specular_, cl::NDRange::d2(cl::roundUp(items, 8), cl::roundUp(g.height, 8), 8, 8),
+      int tileW = vctLaneTileWidth(lanes_), tileH = lanes_ / tileW;
+      int itemsX = (g.width + tileW - 1) / tileW, itemsY = (g.height + tileH - 1) / tileH;
+      f.ctx.launch(specular_, cl::NDRange::d2(cl::roundUp(itemsX, 8), cl::roundUp(itemsY, 8), 8, 8),
                    "vct: specular cone");
     }
   }
