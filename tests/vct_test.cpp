@@ -1299,7 +1299,7 @@ TEST(VctCone, SpecularLanesMatchOneConeAtATime) {
     cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
                                         {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VW", std::to_string(lanes)}});
     cl::Kernel k = prog.kernel("vct_specular");
-    cl::Buffer out = ctx.upload(base, "indirect");
+    cl::Buffer out = ctx.upload(base, "indirect", CL_MEM_READ_WRITE);  // the kernel adds to it
     k.args(g, tp, vs.iso(), vs.aniso(), vs.iso(), vs.iso(), cam, bPos, bNrm, bSpec, out);
     int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
     ctx.launch(k, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8), cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));

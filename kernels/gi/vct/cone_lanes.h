@@ -202,11 +202,12 @@ __attribute__((always_inline)) inline VctStencilV vct_stencil_lanes(float3V p, f
   st.wy[1] = GI_SEL(zero, fy, iy >= -1 && iy < n - 1);
   st.wz[0] = GI_SEL(zero, 1.0f - fz, iz >= 0 && iz < n);
   st.wz[1] = GI_SEL(zero, fz, iz >= -1 && iz < n - 1);
-  st.yr[0] = min(max(iy, 0), n - 1);
-  st.yr[1] = min(max(iy + 1, 0), n - 1);
-  st.zr[0] = min(max(iz, 0), n - 1);
-  st.zr[1] = min(max(iz + 1, 0), n - 1);
-  st.xs = max(min(ix, n - 2), 0);
+  intV zeroI = (intV)(0);  // min/max of two vectors (oclgrind mis-evaluates vector-scalar forms)
+  st.yr[0] = min(max(iy, zeroI), n - 1);
+  st.yr[1] = min(max(iy + 1, zeroI), n - 1);
+  st.zr[0] = min(max(iz, zeroI), n - 1);
+  st.zr[1] = min(max(iz + 1, zeroI), n - 1);
+  st.xs = max(min(ix, n - 2), zeroI);
   intV below = ix < st.xs, above = ix > st.xs;
   st.wFirst = GI_SEL(GI_SEL(wx0, zero, above), wx1, below);
   st.wSecond = GI_SEL(GI_SEL(wx1, wx0, above), zero, below);

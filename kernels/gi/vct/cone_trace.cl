@@ -70,8 +70,10 @@ kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int w
                         global const float4* gAlbedo, global float4* out) {
   int u0 = get_global_id(0) * VCT_TILE_W, v0 = get_global_id(1) * VCT_TILE_H;
   if (u0 >= lowWidth || v0 >= lowHeight) return;
-  intV u = min(u0 + GI_LANES % VCT_TILE_W, lowWidth - 1), v = min(v0 + GI_LANES / VCT_TILE_W, lowHeight - 1);
-  intV q = min(v * GI_DOWN, height - 1) * width + min(u * GI_DOWN, width - 1);
+  // min(vector, (intV)(scalar)), not min(vector, scalar): oclgrind evaluates the mixed form wrongly
+  // (garbage gather addresses at 8 and 16 lanes); PoCL gives the same code either way.
+  intV u = min(u0 + GI_LANES % VCT_TILE_W, (intV)(lowWidth - 1)), v = min(v0 + GI_LANES / VCT_TILE_W, (intV)(lowHeight - 1));
+  intV q = min(v * GI_DOWN, (intV)(height - 1)) * width + min(u * GI_DOWN, (intV)(width - 1));
   floatV px, py, pz, pw, nx, ny, nz, nw;
   GI_GATHER_AOS4(float, (global const float*)gPosition, q, px, py, pz, pw)
   GI_GATHER_AOS4(float, (global const float*)gNormal, q, nx, ny, nz, nw)
@@ -116,8 +118,8 @@ kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiVi
                          global const float4* gSpecular, global float4* out) {
   int x0 = get_global_id(0) * VCT_TILE_W, y0 = get_global_id(1) * VCT_TILE_H;
   if (x0 >= camera.width || y0 >= camera.height) return;
-  intV q = min(y0 + GI_LANES / VCT_TILE_W, camera.height - 1) * camera.width +
-           min(x0 + GI_LANES % VCT_TILE_W, camera.width - 1);
+  intV q = min(y0 + GI_LANES / VCT_TILE_W, (intV)(camera.height - 1)) * camera.width +
+           min(x0 + GI_LANES % VCT_TILE_W, (intV)(camera.width - 1));  // (intV): see vct_diffuse
   floatV px, py, pz, pw, nx, ny, nz, nw, f0r, f0g, f0b, roughness;
   GI_GATHER_AOS4(float, (global const float*)gPosition, q, px, py, pz, pw)
   GI_GATHER_AOS4(float, (global const float*)gNormal, q, nx, ny, nz, nw)
