@@ -108,6 +108,9 @@ public:
       inner_ = inner;
       innerSamples_ = 0;
       for (int i = 0; i < samples; ++i) innerSamples_ += radicalInverse(uint32_t(i) + 1, 2) < inner;
+      // The largest offset component: receivers this far inside the RSM need no texel clamps.
+      sampleReach_ = 0.0f;
+      for (float o : offsets) sampleReach_ = std::max(sampleReach_, std::fabs(o));
     }
     int vw = cl::gatherVectorWidth(f.ctx);
     for (size_t l = 0; l < f.rsms.size(); ++l) {
@@ -131,7 +134,7 @@ public:
       cl::Kernel& gather = block ? (r.view.orthographic ? blockOrtho_ : blockPerspective_)
                                  : (r.view.orthographic ? gatherOrtho_ : gatherPerspective_);
       gather.args(g.width, g.height, lw, lh, g.position, g.normal, r.view, records_, samples, offsets_, weights_,
-                  blockOffsets_, tolerance, innerSamples_, p.getFloat("rsm.d_min"), int(l > 0), low_);
+                  blockOffsets_, tolerance, innerSamples_, p.getFloat("rsm.d_min"), sampleReach_, int(l > 0), low_);
       size_t gx = (size_t(lw) + (block ? blockWidthLanes_ : vw) - 1) / (block ? blockWidthLanes_ : vw);
       f.ctx.launch(gather, cl::NDRange::d2(cl::roundUp(gx, 4), cl::roundUp(gy, 4), 4, 4), "rsm: gather");
     }
@@ -149,6 +152,7 @@ private:
   int down_ = 0, blockDown_ = 0, samples_ = 0, res_ = 0, blockWidthLanes_ = 0;
   float radius_ = 0, inner_ = -1;
   int innerSamples_ = 0;
+  float sampleReach_ = 0.0f;
   bool xi2_ = false;
 };
 
