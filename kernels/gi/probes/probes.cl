@@ -296,27 +296,44 @@ inline int probe_lane_min(intV v) {
   return min(c.x, c.y);
 }
 
-// Whether any lane of a comparison result (−1 or 0 per lane) is set, through the minimum: PoCL
-// turns any() and all() of 16 lanes into a chain of per-lane tests and branches.
-inline int probe_any(intV m) { return probe_lane_min(m) < 0; }
+// The smallest key among the lanes set in `pending`, INT_MAX when none is (keys are texel offsets
+// and cell indices, far below INT_MAX). The pass loops take the lanes key by key with it: one
+// lane reduction per pass both finds the next key and ends the loop (PoCL turns any() and all()
+// of 16 lanes into a chain of per-lane tests and branches, so a separate test through the
+// minimum cost a second reduction per pass).
+inline int probe_next_key(intV keys, intV pending) { return probe_lane_min(GI_SEL((intV)(INT_MAX), keys, pending)); }
 
 // Bilinear (mean, mean²) of one probe's distance map (float2 texels) at the lanes' footprints
 // i00 with weights q, for the lanes set in `lanes`. The directions from one probe to a
 // work-item's adjacent pixels usually fall in one or two texels (a distance texel spans 2/res of
 // the octahedron; Sponza 640×360: 1.9 different footprints among 16 lanes on average): one pass
-// per different footprint (smallest index first), its four records read as scalars.
+// per different footprint, its four records read as scalars. The smallest and the largest index
+// come from two independent lane reductions (no chain of reductions between passes), which
+// covers up to two footprints; a third and more are taken in a loop. `lanes` is never empty (a
+// cell pass has at least one lane).
 __attribute__((always_inline)) inline void probe_distance_sharedV(global const float* map, intV i00, intV lanes,
                                                                   int side, ProbeBilinearV q, floatV* mean,
                                                                   floatV* mean2) {
   floatV m = (floatV)(0.0f), m2 = m;
-  for (intV pending = lanes; probe_any(pending);) {
-    int o = probe_lane_min(GI_SEL((intV)(INT_MAX), i00, pending));
-    intV these = i00 == o;
-    global const float* t = map + 2 * o;
-    m = GI_SEL(m, q.w00 * t[0] + q.w10 * t[2] + q.w01 * t[2 * side] + q.w11 * t[2 * side + 2], these);
-    m2 = GI_SEL(m2, q.w00 * t[1] + q.w10 * t[3] + q.w01 * t[2 * side + 1] + q.w11 * t[2 * side + 3], these);
-    pending &= ~these;
+#define PROBE_DISTANCE_PASS(o)                                                                                  \
+  {                                                                                                             \
+    intV these = i00 == (o);                                                                                    \
+    global const float* t = map + 2 * (o);                                                                      \
+    m = GI_SEL(m, q.w00 * t[0] + q.w10 * t[2] + q.w01 * t[2 * side] + q.w11 * t[2 * side + 2], these);         \
+    m2 = GI_SEL(m2, q.w00 * t[1] + q.w10 * t[3] + q.w01 * t[2 * side + 1] + q.w11 * t[2 * side + 3], these);   \
   }
+  // The smallest and the largest key (two independent reductions): usually all of them.
+  int lo = probe_next_key(i00, lanes), hi = -probe_next_key(-i00, lanes);
+  PROBE_DISTANCE_PASS(lo)
+  if (hi != lo) {
+    PROBE_DISTANCE_PASS(hi)
+    intV pending = lanes & (i00 != lo) & (i00 != hi);
+    for (int o = probe_next_key(i00, pending); o != INT_MAX; o = probe_next_key(i00, pending)) {
+      PROBE_DISTANCE_PASS(o)
+      pending &= i00 != o;
+    }
+  }
+#undef PROBE_DISTANCE_PASS
   *mean = m;
   *mean2 = m2;
 }
@@ -386,16 +403,32 @@ __attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g,
 __attribute__((always_inline)) inline float3V probe_irradiance_sharedV(global const float* const* irrMaps, int o,
                                                                        int side, ProbeBilinearV q,
                                                                        const floatV* weight) {
-  floatV zero = (floatV)(0.0f), ex = zero, ey = zero, ez = zero;
+  // Σ_c weight[c] · Σ_tap q_tap · texel = Σ_tap q_tap · (Σ_c weight[c] · texel): per tap and
+  // channel the 8 probes' weighted texels first (one multiply-add each, its texel a broadcast
+  // scalar), then the four bilinear weights once, 108 instead of 128 vector operations.
+  floatV zero = (floatV)(0.0f);
+  floatV ar = zero, ag = zero, ab = zero, br = zero, bg = zero, bb = zero;
+  floatV cr = zero, cg = zero, cb = zero, dr = zero, dg = zero, db = zero;
 #pragma unroll
   for (int c = 0; c < 8; ++c) {
     global const float* t = irrMaps[c] + 4 * o;
-    floatV a = weight[c] * q.w00, bb = weight[c] * q.w10, cc = weight[c] * q.w01, d = weight[c] * q.w11;
-    ex += a * t[0] + bb * t[4] + cc * t[4 * side] + d * t[4 * side + 4];
-    ey += a * t[1] + bb * t[5] + cc * t[4 * side + 1] + d * t[4 * side + 5];
-    ez += a * t[2] + bb * t[6] + cc * t[4 * side + 2] + d * t[4 * side + 6];
+    global const float* u = t + 4 * side;
+    floatV w = weight[c];
+    ar += w * t[0];
+    ag += w * t[1];
+    ab += w * t[2];
+    br += w * t[4];
+    bg += w * t[5];
+    bb += w * t[6];
+    cr += w * u[0];
+    cg += w * u[1];
+    cb += w * u[2];
+    dr += w * u[4];
+    dg += w * u[5];
+    db += w * u[6];
   }
-  return f3v(ex, ey, ez);
+  return f3v(q.w00 * ar + q.w10 * br + q.w01 * cr + q.w11 * dr, q.w00 * ag + q.w10 * bg + q.w01 * cg + q.w11 * dg,
+             q.w00 * ab + q.w10 * bb + q.w01 * cb + q.w11 * db);
 }
 
 // The 8 probes of cell `cell` for the lanes set in `lanes` (the others get meaningless values):
@@ -434,8 +467,8 @@ __attribute__((always_inline)) inline void probe_cell_sharedV(const GiProbeGrid*
     irrMaps[c] = irradiance + (size_t)probe * irrTexels * 4;
   }
   float3V e = f3v((floatV)(0.0f), (floatV)(0.0f), (floatV)(0.0f));
-  for (intV pending = lanes; probe_any(pending);) {
-    int o = probe_lane_min(GI_SEL((intV)(INT_MAX), b->irrOffset, pending));
+  intV pending = lanes;
+  for (int o = probe_next_key(b->irrOffset, pending); o != INT_MAX; o = probe_next_key(b->irrOffset, pending)) {
     intV these = b->irrOffset == o;
     e = selV(e, probe_irradiance_sharedV(irrMaps, o, iside, b->irrTaps, weight), these);
     pending &= ~these;
@@ -519,8 +552,8 @@ __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiPr
   // once per different footprint. One pass per cell, the other lanes' results discarded.
   intV cell = (bz * cy + by) * cx + bx;
   b.Ex = b.Ey = b.Ez = b.wsum = zero;
-  for (intV pending = (intV)(-1); probe_any(pending);) {
-    int next = probe_lane_min(GI_SEL((intV)(INT_MAX), cell, pending));
+  intV pending = (intV)(-1);
+  for (int next = probe_next_key(cell, pending); next != INT_MAX; next = probe_next_key(cell, pending)) {
     intV these = cell == next;
     ProbeBlendV other = b;
     probe_cell_sharedV(g, &other, these, irradiance, distance, probeStates, next, ax, ay, az);
@@ -592,10 +625,11 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   float3V x, ng, n, alb;
   // The lanes' G-buffer records: a whole tile's rows are contiguous vector loads (down = 1), else
   // one 128-bit load per lane.
+  int fullTile = u0 + tileW <= lw && v0 + tileH <= lh;
 #if GI_VW > 1
   size_t first = (size_t)v0 * camera.width + u0;
   int stride = 4 * camera.width;
-  if (down == 1 && u0 + tileW <= lw && v0 + tileH <= lh) {
+  if (down == 1 && fullTile) {
     PROBE_TILE_LOAD4(P + 4 * first, stride, x.x, x.y, x.z, pw)
     PROBE_TILE_LOAD4(G + 4 * first, stride, ng.x, ng.y, ng.z, unused)
     PROBE_TILE_LOAD4(N + 4 * first, stride, n.x, n.y, n.z, unused)
@@ -618,7 +652,12 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   float3V E = probe_field_irradianceV(&grid, (global const float*)irradiance, (global const float*)distance,
                                       (global const float*)probeStates, x, n, ng, wo);
   if (down == 1) {
-    GI_GATHER_AOS4(float, A, i, alb.x, alb.y, alb.z, unused)
+#if GI_VW > 1
+    if (fullTile)
+      PROBE_TILE_LOAD4(A + 4 * first, stride, alb.x, alb.y, alb.z, unused)
+    else
+#endif
+      GI_GATHER_AOS4(float, A, i, alb.x, alb.y, alb.z, unused)
     E = f3v(alb.x * GI_INV_PI * E.x, alb.y * GI_INV_PI * E.y, alb.z * GI_INV_PI * E.z);
   }
   intV surface = pw != 0.0f;
@@ -626,6 +665,15 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   float tmp[4 * GI_VW];
   floatV ox = GI_SEL(zero, E.x, surface), oy = GI_SEL(zero, E.y, surface), oz = GI_SEL(zero, E.z, surface);
   GI_AOS4_STORE(tmp, ox, oy, oz, zero)
+#if GI_VW > 1
+  // A whole tile: each of its rows is 4 · tileW contiguous floats of tmp and of the image.
+  if (fullTile) {
+    for (int r = 0; r < tileH; ++r)
+      for (int k = 0; k < tileW / 4; ++k)
+        vstore16(vload16(r * (tileW / 4) + k, tmp), k, (global float*)(out + (size_t)(v0 + r) * lw + u0));
+    return;
+  }
+#endif
   for (int l = 0; l < GI_VW; ++l) {
     int ul = u0 + (l & (tileW - 1)), vl = v0 + (l >> shift);
     if (ul < lw && vl < lh) out[(size_t)vl * lw + ul] = vload4(l, tmp);
