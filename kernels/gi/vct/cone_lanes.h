@@ -83,47 +83,57 @@ __attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const 
 }
 #undef VCT_BLEND3_LANE
 #endif
+
+// The 8 planes (R0 G0 B0 A0 R1 G1 B1 A1) of a tap pair, unpacked from what the per-width gathers
+// return: two float8[8] halves at 16 lanes, one float8[8] at 8 lanes, one float8 at 1 lane.
+#define VCT_UNPACK_HALVES(lo_, hi_, R0, G0, B0, A0, R1, G1, B1, A1) \
+  R0 = (float16)(lo_[0], hi_[0]);                                 \
+  G0 = (float16)(lo_[1], hi_[1]);                                 \
+  B0 = (float16)(lo_[2], hi_[2]);                                 \
+  A0 = (float16)(lo_[3], hi_[3]);                                 \
+  R1 = (float16)(lo_[4], hi_[4]);                                 \
+  G1 = (float16)(lo_[5], hi_[5]);                                 \
+  B1 = (float16)(lo_[6], hi_[6]);                                 \
+  A1 = (float16)(lo_[7], hi_[7]);
+#define VCT_UNPACK_PLANES(t_, R0, G0, B0, A0, R1, G1, B1, A1) \
+  R0 = t_[0];                                                 \
+  G0 = t_[1];                                                 \
+  B0 = t_[2];                                                 \
+  A0 = t_[3];                                                 \
+  R1 = t_[4];                                                 \
+  G1 = t_[5];                                                 \
+  B1 = t_[6];                                                 \
+  A1 = t_[7];
+#define VCT_UNPACK_RECORD(a_, R0, G0, B0, A0, R1, G1, B1, A1) \
+  R0 = a_.s0;                                                 \
+  G0 = a_.s1;                                                 \
+  B0 = a_.s2;                                                 \
+  A0 = a_.s3;                                                 \
+  R1 = a_.s4;                                                 \
+  G1 = a_.s5;                                                 \
+  B1 = a_.s6;                                                 \
+  A1 = a_.s7;
+
 #if GI_VW == 16
 #define VCT_GATHER_PAIR(p, i, R0, G0, B0, A0, R1, G1, B1, A1) \
   {                                                          \
     float8 lo_[8], hi_[8];                                   \
     vct_pair_planes8(p, (i).lo, lo_);                        \
     vct_pair_planes8(p, (i).hi, hi_);                        \
-    R0 = (float16)(lo_[0], hi_[0]);                          \
-    G0 = (float16)(lo_[1], hi_[1]);                          \
-    B0 = (float16)(lo_[2], hi_[2]);                          \
-    A0 = (float16)(lo_[3], hi_[3]);                          \
-    R1 = (float16)(lo_[4], hi_[4]);                          \
-    G1 = (float16)(lo_[5], hi_[5]);                          \
-    B1 = (float16)(lo_[6], hi_[6]);                          \
-    A1 = (float16)(lo_[7], hi_[7]);                          \
+    VCT_UNPACK_HALVES(lo_, hi_, R0, G0, B0, A0, R1, G1, B1, A1) \
   }
 #elif GI_VW == 8
 #define VCT_GATHER_PAIR(p, i, R0, G0, B0, A0, R1, G1, B1, A1) \
   {                                                          \
     float8 t_[8];                                            \
     vct_pair_planes8(p, i, t_);                              \
-    R0 = t_[0];                                              \
-    G0 = t_[1];                                              \
-    B0 = t_[2];                                              \
-    A0 = t_[3];                                              \
-    R1 = t_[4];                                              \
-    G1 = t_[5];                                              \
-    B1 = t_[6];                                              \
-    A1 = t_[7];                                              \
+    VCT_UNPACK_PLANES(t_, R0, G0, B0, A0, R1, G1, B1, A1)    \
   }
 #elif GI_VW == 1
 #define VCT_GATHER_PAIR(p, i, R0, G0, B0, A0, R1, G1, B1, A1) \
   {                                                          \
     float8 a_ = vload8(0, (p) + (i));                        \
-    R0 = a_.s0;                                              \
-    G0 = a_.s1;                                              \
-    B0 = a_.s2;                                              \
-    A0 = a_.s3;                                              \
-    R1 = a_.s4;                                              \
-    G1 = a_.s5;                                              \
-    B1 = a_.s6;                                              \
-    A1 = a_.s7;                                              \
+    VCT_UNPACK_RECORD(a_, R0, G0, B0, A0, R1, G1, B1, A1)    \
   }
 #endif
 
@@ -141,41 +151,20 @@ __attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const 
     float8 lo_[8], hi_[8];                                                             \
     vct_pair_planes8_blend3(p, (i0).lo, (i1).lo, (i2).lo, (w0).lo, (w1).lo, (w2).lo, lo_); \
     vct_pair_planes8_blend3(p, (i0).hi, (i1).hi, (i2).hi, (w0).hi, (w1).hi, (w2).hi, hi_); \
-    R0 = (float16)(lo_[0], hi_[0]);                                                    \
-    G0 = (float16)(lo_[1], hi_[1]);                                                    \
-    B0 = (float16)(lo_[2], hi_[2]);                                                    \
-    A0 = (float16)(lo_[3], hi_[3]);                                                    \
-    R1 = (float16)(lo_[4], hi_[4]);                                                    \
-    G1 = (float16)(lo_[5], hi_[5]);                                                    \
-    B1 = (float16)(lo_[6], hi_[6]);                                                    \
-    A1 = (float16)(lo_[7], hi_[7]);                                                    \
+    VCT_UNPACK_HALVES(lo_, hi_, R0, G0, B0, A0, R1, G1, B1, A1)                        \
   }
 #elif GI_VW == 8
 #define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1) \
   {                                                                                    \
     float8 t_[8];                                                                      \
     vct_pair_planes8_blend3(p, i0, i1, i2, w0, w1, w2, t_);                            \
-    R0 = t_[0];                                                                        \
-    G0 = t_[1];                                                                        \
-    B0 = t_[2];                                                                        \
-    A0 = t_[3];                                                                        \
-    R1 = t_[4];                                                                        \
-    G1 = t_[5];                                                                        \
-    B1 = t_[6];                                                                        \
-    A1 = t_[7];                                                                        \
+    VCT_UNPACK_PLANES(t_, R0, G0, B0, A0, R1, G1, B1, A1)                              \
   }
 #elif GI_VW == 1
 #define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1)                 \
   {                                                                                                    \
     float8 a_ = (w0) * vload8(0, (p) + (i0)) + (w1) * vload8(0, (p) + (i1)) + (w2) * vload8(0, (p) + (i2)); \
-    R0 = a_.s0;                                                                                        \
-    G0 = a_.s1;                                                                                        \
-    B0 = a_.s2;                                                                                        \
-    A0 = a_.s3;                                                                                        \
-    R1 = a_.s4;                                                                                        \
-    G1 = a_.s5;                                                                                        \
-    B1 = a_.s6;                                                                                        \
-    A1 = a_.s7;                                                                                        \
+    VCT_UNPACK_RECORD(a_, R0, G0, B0, A0, R1, G1, B1, A1)                                              \
   }
 #endif
 
