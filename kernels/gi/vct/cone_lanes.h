@@ -168,6 +168,21 @@ __attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const 
   }
 #endif
 
+// acc += w0 × first record + w1 × second record of a tap pair (first record's terms first, so the
+// sums round as they always have).
+__attribute__((always_inline)) inline void vct_add_pair(RgbaV* acc, floatV w0, floatV w1, floatV r0, floatV g0,
+                                                        floatV b0, floatV a0, floatV r1, floatV g1, floatV b1,
+                                                        floatV a1) {
+  acc->r += w0 * r0;
+  acc->g += w0 * g0;
+  acc->b += w0 * b0;
+  acc->a += w0 * a0;
+  acc->r += w1 * r1;
+  acc->g += w1 * g1;
+  acc->b += w1 * b1;
+  acc->a += w1 * a1;
+}
+
 // The stencil of a trilinear lookup at p (level-0 voxel units) in a volume of n³ voxels, scale =
 // n / N, per lane: the tap pair along x of each (y, z) row starts at xs = clamp(ix, 0, n − 2) with
 // weights wFirst, wSecond (each tap's weight moved to its place in the pair; a tap outside the
@@ -243,14 +258,7 @@ __attribute__((always_inline)) inline void vox_trilinear_lanes(global const floa
 #else
     floatV r0, g0, b0, a0, r1, g1, b1, a1;
     VCT_GATHER_PAIR(vol, idx * 4, r0, g0, b0, a0, r1, g1, b1, a1)
-    acc->r += w0 * r0;
-    acc->g += w0 * g0;
-    acc->b += w0 * b0;
-    acc->a += w0 * a0;
-    acc->r += w1 * r1;
-    acc->g += w1 * g1;
-    acc->b += w1 * b1;
-    acc->a += w1 * a1;
+    vct_add_pair(acc, w0, w1, r0, g0, b0, a0, r1, g1, b1, a1);
 #endif
   }
 }
@@ -364,14 +372,7 @@ __attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelM
         VCT_GATHER_PAIR(chain, bx + idx, r0, g0, b0, a0, r1, g1, b1, a1)
       }
     }
-    acc->r += w0 * r0;
-    acc->g += w0 * g0;
-    acc->b += w0 * b0;
-    acc->a += w0 * a0;
-    acc->r += w1 * r1;
-    acc->g += w1 * g1;
-    acc->b += w1 * b1;
-    acc->a += w1 * a1;
+    vct_add_pair(acc, w0, w1, r0, g0, b0, a0, r1, g1, b1, a1);
   }
 #endif
 }
