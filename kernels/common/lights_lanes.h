@@ -53,8 +53,8 @@ inline floatV shadow_pcf_viewV(global const GiView* views, global const uint* of
   intV ix = convert_intV(floor(GI_SEL(fx, (floatV)(0.0f), lit1)));
   intV iy = convert_intV(floor(GI_SEL(fy, (floatV)(0.0f), lit1)));
   global const float* map = depths + offsets[vi];
-  intV x0 = max(ix - 1, 0), x2 = min(ix + 1, v->width - 1);
-  intV r0 = max(iy - 1, 0) * v->width, r1 = iy * v->width, r2 = min(iy + 1, v->height - 1) * v->width;
+  intV x0 = max(ix - 1, (intV)(0)), x2 = min(ix + 1, (intV)(v->width - 1));
+  intV r0 = max(iy - 1, (intV)(0)) * v->width, r1 = iy * v->width, r2 = min(iy + 1, (intV)(v->height - 1)) * v->width;
   floatV one = (floatV)(1.0f), zero = (floatV)(0.0f);
   floatV lit = zero;
   if (v->width >= 4) {
@@ -62,7 +62,7 @@ inline floatV shadow_pcf_viewV(global const GiView* views, global const uint* of
     // and a transposition instead of 9 scalar gathers: −10 % CPU time of the voxel injection,
     // docs/PERFORMANCE.md), the taps picked from it by their clamped columns. The same taps:
     // the same bits (each adds 0 or 1).
-    intV xs = min(max(ix - 1, 0), v->width - 4);
+    intV xs = min(max(ix - 1, (intV)(0)), (intV)(v->width - 4));
     intV j0 = x0 - xs, j1 = ix - xs, j2 = x2 - xs;
     intV rows[3] = {r0, r1, r2};
 #define GI_PICK(j) GI_SEL(GI_SEL(d0, d1, (j) >= 1), GI_SEL(d2, d3, (j) >= 3), (j) >= 2)

@@ -16,7 +16,7 @@ typedef struct {
 
 inline GiTexLevelV texture_levelV(global const GiTexture* table, intV index, floatV lod) {
   global const int* tab = (global const int*)table;
-  intV ti = max(index, 0) * 8;  // GiTexture: 8 ints (offset, width, height, levels, srgb, pad)
+  intV ti = max(index, (intV)(0)) * 8;  // GiTexture: 8 ints (offset, width, height, levels, srgb, pad)
   GiTexLevelV r;
   intV offsetBits, levels;
   GI_GATHER_SPAN4(int, tab, ti, offsetBits, r.w, r.h, levels)

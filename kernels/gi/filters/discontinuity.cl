@@ -344,7 +344,7 @@ kernel void geometry_aware_upsample(int width, int height, int lowWidth, int low
   intV x = x0 + GI_LANES;
   bool whole = x0 + GI_VW <= width;  // every lane is a pixel: contiguous loads and stores
   size_t row = (size_t)y * width;
-  intV own = (int)row + min(x, width - 1);
+  intV own = (int)row + min(x, (intV)(width - 1));
   floatV z, nx, ny, nz, unused, ar, ag, ab;
   uintV id;
   if (whole) {

@@ -40,7 +40,7 @@ inline __attribute__((always_inline)) GiSlotRun gi_slot_run(int width, int heigh
   intV x = cx + n * (qx0 + GI_LANES);
   GiSlotRun r;
   r.slot = (size_t)(cx + n * cy) * stride + (size_t)qy * subPitch + qx0;
-  r.pixel = min(y, height - 1) * width + min(x, width - 1);
+  r.pixel = min(y, height - 1) * width + min(x, (intV)(width - 1));
 #if GI_VW == 1
   r.valid = x < width && y < height;
 #else
