@@ -303,17 +303,36 @@ inline int probe_lane_min(intV v) {
 // minimum cost a second reduction per pass).
 inline int probe_next_key(intV keys, intV pending) { return probe_lane_min(GI_SEL((intV)(INT_MAX), keys, pending)); }
 
+// Whether any lane of a mask (lanes −1 or 0) is set. With AVX-512 the lanes' sign bits as a mask
+// register (vpmovd2m), one instruction; elsewhere the lane minimum.
+#if defined(__has_builtin) && defined(GI_DEVICE_CPU) && GI_VW == 16 && defined(__AVX512DQ__)
+#if __has_builtin(__builtin_ia32_cvtd2mask512)
+#define PROBE_MASK_BITS(m) __builtin_ia32_cvtd2mask512(m)
+#endif
+#endif
+inline int probe_lane_any(intV m) {
+#ifdef PROBE_MASK_BITS
+  return PROBE_MASK_BITS(m) != 0;
+#else
+  return probe_lane_min(m) != 0;
+#endif
+}
+
 // Bilinear (mean, mean²) of one probe's distance map (float2 texels) at the lanes' footprints
 // i00 with weights q, for the lanes set in `lanes`. The directions from one probe to a
 // work-item's adjacent pixels usually fall in one or two texels (a distance texel spans 2/res of
-// the octahedron; Sponza 640×360: 1.9 different footprints among 16 lanes on average): one pass
-// per different footprint, its four records read as scalars. The smallest and the largest index
-// come from two independent lane reductions (no chain of reductions between passes), which
-// covers up to two footprints; a third and more are taken in a loop. `lanes` is never empty (a
-// cell pass has at least one lane).
+// the octahedron): one pass per different footprint, its four records read as scalars. The first
+// two passes take the footprints of the first and the last lane of `lanes` (firstLane, lastLane:
+// opposite corners of the tile, or of its part in this cell pass), unconditionally, even when
+// they are the same footprint: no lane reduction and no branch on the footprints, which cost
+// more than a redundant pass (before: the smallest and largest footprint from two reductions,
+// the second pass a branch on them). Lanes with a third footprint or more are taken in a loop,
+// one reduction per pass; its branch is rare with the corners of the cell pass's own lanes
+// (with lanes 0 and GI_VW − 1 whatever the cell, the loop ran often: it cost ≈ 14 % of the
+// shading, against ≈ 4 % now; docs/PERFORMANCE.md, "probes: G-buffer prefetch, distance passes").
 __attribute__((always_inline)) inline void probe_distance_sharedV(global const float* map, intV i00, intV lanes,
-                                                                  int side, ProbeBilinearV q, floatV* mean,
-                                                                  floatV* mean2) {
+                                                                  int firstLane, int lastLane, int side,
+                                                                  ProbeBilinearV q, floatV* mean, floatV* mean2) {
   floatV m = (floatV)(0.0f), m2 = m;
 #define PROBE_DISTANCE_PASS(o)                                                                                  \
   {                                                                                                             \
@@ -322,17 +341,17 @@ __attribute__((always_inline)) inline void probe_distance_sharedV(global const f
     m = GI_SEL(m, q.w00 * t[0] + q.w10 * t[2] + q.w01 * t[2 * side] + q.w11 * t[2 * side + 2], these);         \
     m2 = GI_SEL(m2, q.w00 * t[1] + q.w10 * t[3] + q.w01 * t[2 * side + 1] + q.w11 * t[2 * side + 3], these);   \
   }
-  // The smallest and the largest key (two independent reductions): usually all of them.
-  int lo = probe_next_key(i00, lanes), hi = -probe_next_key(-i00, lanes);
-  PROBE_DISTANCE_PASS(lo)
-  if (hi != lo) {
-    PROBE_DISTANCE_PASS(hi)
-    intV pending = lanes & (i00 != lo) & (i00 != hi);
+  int keys[GI_VW];
+  vstoreV(i00, 0, keys);
+  int first = keys[firstLane], last = keys[lastLane];
+  PROBE_DISTANCE_PASS(first)
+  PROBE_DISTANCE_PASS(last)
+  intV pending = lanes & (i00 != first) & (i00 != last);
+  if (probe_lane_any(pending))
     for (int o = probe_next_key(i00, pending); o != INT_MAX; o = probe_next_key(i00, pending)) {
       PROBE_DISTANCE_PASS(o)
       pending &= i00 != o;
     }
-  }
 #undef PROBE_DISTANCE_PASS
   *mean = m;
   *mean2 = m2;
@@ -371,7 +390,8 @@ typedef struct {
 // texel offset distBase).
 __attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g, const ProbeBlendV* b, floatV w,
                                                            floatV ppx, floatV ppy, floatV ppz,
-                                                           global const float* distMap, intV distBase, intV lanes) {
+                                                           global const float* distMap, intV distBase, intV lanes,
+                                                           int firstLane, int lastLane) {
   int dres = g->distance_res, dside = dres + 2;
   floatV tpx = ppx - b->x.x, tpy = ppy - b->x.y, tpz = ppz - b->x.z;
   floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
@@ -386,7 +406,7 @@ __attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g,
                               &distOffset, &dtx, &dty);
   ProbeBilinearV q = probe_bilinear_weightsV(dtx, dty);
 #if GI_VW > 1
-  probe_distance_sharedV(distMap, distBase + distOffset, lanes, dside, q, &mean, &mean2);
+  probe_distance_sharedV(distMap, distBase + distOffset, lanes, firstLane, lastLane, dside, q, &mean, &mean2);
 #else
   probe_distance_pixelV(distMap, distBase + distOffset, dside, q, &mean, &mean2);
 #endif
@@ -452,6 +472,8 @@ __attribute__((always_inline)) inline void probe_cell_sharedV(const GiProbeGrid*
   floatV weight[8];
   global const float* irrMaps[8];
   b->wsum = (floatV)(0.0f);
+  // The first and the last lane of this cell pass (once per pass; the distance lookups start there).
+  int firstLane = probe_next_key((intV)(GI_LANES), lanes), lastLane = -probe_next_key(-(intV)(GI_LANES), lanes);
 #pragma unroll
   for (int c = 0; c < 8; ++c) {
     int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
@@ -462,7 +484,7 @@ __attribute__((always_inline)) inline void probe_cell_sharedV(const GiProbeGrid*
     w *= state.w;
     weight[c] = probe_weightV(g, b, w, (floatV)(ox + (float)pix * sx + state.x), (floatV)(oy + (float)piy * sy + state.y),
                               (floatV)(oz + (float)piz * sz + state.z), distance + (size_t)probe * distTexels * 2,
-                              (intV)(0), lanes);
+                              (intV)(0), lanes, firstLane, lastLane);
     b->wsum += weight[c];
     irrMaps[c] = irradiance + (size_t)probe * irrTexels * 4;
   }
@@ -513,7 +535,7 @@ __attribute__((always_inline)) inline void probe_cell_pixelV(const GiProbeGrid* 
     GI_GATHER_AOS4(float, probeStates, probe, movedX, movedY, movedZ, active)
     w *= active;
     w = probe_weightV(g, b, w, ox + convert_floatV(pix) * sx + movedX, oy + convert_floatV(piy) * sy + movedY,
-                      oz + convert_floatV(piz) * sz + movedZ, distance, probe * distTexels, (intV)(-1));
+                      oz + convert_floatV(piz) * sz + movedZ, distance, probe * distTexels, (intV)(-1), 0, 0);
     b->wsum += w;
     float3V e = probe_irradiance_pixelV(irradiance, probe * irrTexels + b->irrOffset, iside, b->irrTaps, w);
     b->Ex += e.x;
@@ -602,6 +624,29 @@ __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiPr
 #endif
 #endif
 
+#if GI_VW > 1
+// The tiles' G-buffer reads missed the caches (≈ 20 % of the kernel's perf samples on the loads
+// of PROBE_TILE_LOAD4): a tile row is tileW float4 records (two 64-byte lines at 16 lanes) of
+// each of the four buffers, and the work-items of a work-group row read one short run of them
+// before jumping 2 rows down, too short a stream for the hardware prefetcher. So each work-item
+// of a full-resolution tile prefetches the rows of the tile below it: the items of a work-group
+// run in order on one CPU core, x fastest, so that tile is read one work-group row (8 items)
+// later. clang's __builtin_prefetch, as PoCL's prefetch() is a no-op (as vct_inject and the rsm
+// gather do); CPU devices only (GI_VW > 1). Results unchanged; −11 % CPU time (docs/PERFORMANCE.md,
+// "probes: G-buffer prefetch, distance passes").
+inline void probe_prefetch_tile_below(global const float* P, global const float* G, global const float* N,
+                                      global const float* A, size_t first, int stride, int tileW, int tileH) {
+  for (int r = tileH; r < 2 * tileH; ++r)
+    for (int k = 0; k < tileW / 4; ++k) {
+      size_t at = first + (size_t)r * stride + 16 * k;
+      __builtin_prefetch(P + at);
+      __builtin_prefetch(G + at);
+      __builtin_prefetch(N + at);
+      __builtin_prefetch(A + at);
+    }
+}
+#endif
+
 // One work-item: a tile of pixels (u, v) of a (⌈W/down⌉ × ⌈H/down⌉) image, pixel (u, v)
 // evaluated at camera pixel (u·down, v·down): down = 1 writes the indirect radiance ρ/π · E,
 // down > 1 writes E for the geometry-aware upsampler (gi/filters). Background: 0.
@@ -630,6 +675,7 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   size_t first = (size_t)v0 * camera.width + u0;
   int stride = 4 * camera.width;
   if (down == 1 && fullTile) {
+    if (v0 + 2 * tileH <= lh) probe_prefetch_tile_below(P, G, N, A, 4 * first, stride, tileW, tileH);
     PROBE_TILE_LOAD4(P + 4 * first, stride, x.x, x.y, x.z, pw)
     PROBE_TILE_LOAD4(G + 4 * first, stride, ng.x, ng.y, ng.z, unused)
     PROBE_TILE_LOAD4(N + 4 * first, stride, n.x, n.y, n.z, unused)
