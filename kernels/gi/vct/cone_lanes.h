@@ -263,6 +263,29 @@ __attribute__((always_inline)) inline void vox_trilinear_lanes(global const floa
   }
 }
 
+// acc += weight × Σ_k b_k·trilinear(volume k) of the three volumes of n³ voxels, n = 2^shift, that
+// start at voxels base0, base1, base2 of `vol` (radiance, α): a lookup is linear in the records, so
+// the blend of the three lookups is the lookup of the blended records, each tap pair blended per
+// lane before one transposition (VCT_GATHER_PAIR_BLEND3) instead of three. Same taps and weights as
+// three vox_trilinear_lanes; the sums are associated differently (not bit-identical to them).
+__attribute__((always_inline)) inline void vox_trilinear_blend3_lanes(global const float* vol, intV base0, intV base1,
+                                                                      intV base2, floatV b0, floatV b1, floatV b2,
+                                                                      intV shift, float3V p, floatV scale,
+                                                                      floatV weight, RgbaV* acc) {
+  intV n = (intV)(1) << shift;
+  VctStencilV st = vct_stencil_lanes(p, scale, n);
+#pragma unroll
+  for (int row = 0; row < 4; ++row) {
+    int yb = row & 1, zb = row >> 1;
+    intV idx = (((st.zr[zb] << shift) + st.yr[yb]) << shift) + st.xs;
+    floatV wRow = st.wy[yb] * st.wz[zb] * weight;
+    floatV r0, g0, b0_, a0, r1, g1, b1_, a1;
+    VCT_GATHER_PAIR_BLEND3(vol, 4 * (base0 + idx), 4 * (base1 + idx), 4 * (base2 + idx), b0, b1, b2, r0, g0, b0_, a0,
+                           r1, g1, b1_, a1)
+    vct_add_pair(acc, st.wFirst * wRow, st.wSecond * wRow, r0, g0, b0_, a0, r1, g1, b1_, a1);
+  }
+}
+
 // acc += weight × level `level` (per lane) seen along d (vox_level_sample). Level offsets in closed
 // form: Σ_{l<L} (N >> l)³ = 8·n³·(8^L − 1)/7 with n = N >> L, and (8^L − 1)/7 = octal 1…1 (L ones).
 __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, intV level, float3V p, float3V d, floatV weight, RgbaV* acc) {
@@ -286,13 +309,21 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
   if (!m.anisotropic || GI_ALL(isoLanes)) return;
   floatV da[3] = {d.x, d.y, d.z};
   intV shiftDirectional = GI_SEL(shift, (intV)(0), isoLanes);
-  for (int axis = 0; axis < 3; ++axis) {
-    // Directional volume 2·axis (+) or 2·axis + 1 (−) of the level (vox_aniso_offset).
-    intV dir = 2 * axis + GI_SEL((intV)(1), (intV)(0), da[axis] >= 0.0f);
-    intV base = 6 * (offset - N3) + dir * n3;
-    vox_trilinear_lanes(m.aniso, m.shAniso, GI_SEL(base, (intV)(0), isoLanes), shiftDirectional, p, scale,
+  // Directional volume 2·axis (+) or 2·axis + 1 (−) of the level (vox_aniso_offset), per axis.
+  intV base[3];
+  for (int axis = 0; axis < 3; ++axis)
+    base[axis] = GI_SEL(6 * (offset - N3) + (2 * axis + GI_SEL((intV)(1), (intV)(0), da[axis] >= 0.0f)) * n3,
+                        (intV)(0), isoLanes);
+#if GI_VCT_SH
+  for (int axis = 0; axis < 3; ++axis)
+    vox_trilinear_lanes(m.aniso, m.shAniso, base[axis], shiftDirectional, p, scale,
                         GI_SEL(weight * da[axis] * da[axis], (floatV)(0.0f), isoLanes), Y0, Y1y, Y1z, Y1x, acc);
-  }
+#else
+  // The three volumes share the stencil: blended per tap pair before one transposition
+  // (vox_trilinear_blend3_lanes), as the level-aligned march does.
+  vox_trilinear_blend3_lanes(m.aniso, base[0], base[1], base[2], d.x * d.x, d.y * d.y, d.z * d.z, shiftDirectional, p,
+                             scale, GI_SEL(weight, (floatV)(0.0f), isoLanes), acc);
+#endif
 }
 
 // acc += level `level` (the same in every lane) seen along d, for the level-aligned march
