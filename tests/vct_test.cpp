@@ -1242,27 +1242,31 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
   }
 }
 
-TEST(VctCone, SpecularLanesMatchOneConeAtATime) {
-  // vct_specular marches GI_VW pixels per work-item, each lane its own aperture (cone_lanes.h); it
-  // must add what the one-cone-at-a-time march (vct_trace_cones) along the host's mirror
-  // directions, times the host's Schlick Fresnel, gives. A 37×5 "G-buffer" of random points,
-  // normals, F0 and roughness, every 7th pixel background; the output holds 0.1 beforehand.
+// vct_specular (GI_VW pixels per work-item, each lane its own aperture, cone_lanes.h) on a 37×5
+// "G-buffer" of random points, normals, F0 and roughness (every 7th pixel background; the output
+// holds 0.1 beforehand) over `level0` with anisotropic mips: it must add what the
+// one-cone-at-a-time march (vct_trace_cones) along the host's mirror directions, times the host's
+// Schlick Fresnel, gives, and skipping the lookups the empty-space map shows empty must change no
+// bit (the same kernel with a map that marks every cell occupied).
+void checkSpecularLanes(const std::vector<glm::vec4>& level0, uint32_t seed, const char* label) {
   cl::Context& ctx = test::context();
   Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
   VoxelScene vs(ctx, s, 32);
   const GiVoxelGrid& g = vs.grid();
   glm::vec3 origin(g.origin[0], g.origin[1], g.origin[2]);
-  std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 31);
-  for (auto& v : level0) v *= 0.3f;
   writeLevel0(ctx, vs, level0);
   vs.buildMips(true);
+  vs.buildEmptySpace();
+  std::vector<uint8_t> map = ctx.download<uint8_t>(vs.emptySpace());
+  size_t emptyCells = std::count(map.begin(), map.end(), uint8_t(0));
+  cl::Buffer noEmptySpace = ctx.upload(std::vector<uint8_t>(map.size(), 1), "no empty space");
   const int W = 37, H = 5, count = W * H;
   GiView cam{};
   glm::vec3 eye = origin + glm::vec3(16.0f, 40.0f, 16.0f) * g.voxel_size;
   for (int k = 0; k < 3; ++k) cam.eye[k] = eye[k];
   cam.width = W;
   cam.height = H;
-  std::mt19937 rng(32);
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
   std::vector<glm::vec4> pos(count), nrm(count), spec(count), base(count, glm::vec4(0.1f, 0.1f, 0.1f, 0.0f));
   for (int i = 0; i < count; ++i) {
@@ -1299,24 +1303,111 @@ TEST(VctCone, SpecularLanesMatchOneConeAtATime) {
     cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
                                         {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VW", std::to_string(lanes)}});
     cl::Kernel k = prog.kernel("vct_specular");
-    cl::Buffer out = ctx.upload(base, "indirect", CL_MEM_READ_WRITE);  // the kernel adds to it
-    k.args(g, tp, vs.iso(), vs.aniso(), vs.iso(), vs.iso(), cam, bPos, bNrm, bSpec, out);
-    int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
-    ctx.launch(k, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8), cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
-    std::vector<glm::vec4> got = ctx.download<glm::vec4>(out);
-    ctx.profiler().discard();
+    std::vector<glm::vec4> got[2];
+    for (int skip = 0; skip < 2; ++skip) {
+      cl::Buffer out = ctx.upload(base, "indirect", CL_MEM_READ_WRITE);  // the kernel adds to it
+      k.args(g, tp, vs.iso(), vs.aniso(), vs.iso(), vs.iso(), skip ? vs.emptySpace() : noEmptySpace, cam, bPos, bNrm,
+             bSpec, out);
+      int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
+      ctx.launch(k, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8), cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
+      got[skip] = ctx.download<glm::vec4>(out);
+      ctx.profiler().discard();
+    }
     std::vector<glm::vec4> expected = base;
     for (size_t j = 0; j < pixel.size(); ++j)
       expected[pixel[j]] += glm::vec4(fresnel[j] * glm::vec3(ref.radiance[j]), 0.0f);
     float worst = 0, largest = 0;
+    int changedBySkipping = 0;
     for (int i = 0; i < count; ++i)
       for (int c = 0; c < 4; ++c) {
-        worst = std::max(worst, std::abs(got[i][c] - expected[i][c]));
+        worst = std::max(worst, std::abs(got[1][i][c] - expected[i][c]));
         largest = std::max(largest, std::abs(expected[i][c] - base[i][c]));
+        changedBySkipping += got[1][i][c] != got[0][i][c];
       }
-    std::printf("specular cone, %d lanes vs one cone at a time (anisotropic mips, %zu of %d pixels): max abs "
-                "difference %.2e (largest term %.3f)\n", lanes, pixel.size(), count, worst, largest);
+    std::printf("specular cone, %s, %d lanes vs one cone at a time (anisotropic mips, %zu of %d pixels, %zu of %zu "
+                "map cells empty): max abs difference %.2e (largest term %.3f); %d values changed by the empty-space "
+                "skip\n", label, lanes, pixel.size(), count, emptyCells, map.size(), worst, largest, changedBySkipping);
     EXPECT_GT(largest, 0.05f);
     EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));
+    EXPECT_EQ(changedBySkipping, 0);
+  }
+}
+
+TEST(VctCone, SpecularLanesMatchOneConeAtATime) {
+  std::vector<glm::vec4> level0 = randomLevel0(32 * 32 * 32, 31);
+  for (auto& v : level0) v *= 0.3f;
+  checkSpecularLanes(level0, 32, "random voxels (a quarter occupied)");
+}
+
+TEST(VctCone, SpecularEmptySpaceSkipChangesNothing) {
+  // Mostly empty space: three walls (one lit, one 3 voxels thick and half transparent, one thin
+  // at the grid's edge) and a sparse scatter of small voxels, so that most cones cross long empty
+  // stretches at every level before they meet something.
+  const int N = 32;
+  std::vector<glm::vec4> level0(N * N * N, glm::vec4(0.0f));
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  auto at = [&](int x, int y, int z) -> glm::vec4& { return level0[(size_t(z) * N + y) * N + x]; };
+  for (int a = 0; a < N; ++a)
+    for (int b = 0; b < N; ++b) {
+      at(a, 30, b) = glm::vec4(0.6f, 0.5f, 0.4f, 1.0f);  // a lit ceiling
+      for (int x = 5; x < 8; ++x) at(x, a, b) = glm::vec4(0.05f, 0.1f, 0.2f, 0.4f);
+      at(a, b, 0) = glm::vec4(0.2f, 0.3f, 0.1f, 1.0f);
+    }
+  for (int k = 0; k < 60; ++k) {
+    float alpha = 0.2f + 0.8f * U(rng);
+    at(int(U(rng) * N) % N, int(U(rng) * N) % N, int(U(rng) * N) % N) = glm::vec4(glm::vec3(U(rng), U(rng), U(rng)) * alpha, alpha);
+  }
+  checkSpecularLanes(level0, 42, "mostly empty space");
+}
+
+TEST(VctMips, EmptySpaceMapMatchesHost) {
+  // Per level l and cell i: 0 exactly when no occupancy bit is set under the cells i … i + 1 of
+  // the level (inside the volume) — the host's count from the bits, level by level.
+  cl::Context& ctx = test::context();
+  Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
+  for (int N : {32, 64}) {
+    VoxelScene vs(ctx, s, N);
+    std::mt19937 rng(51 + N);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    std::vector<glm::vec4> level0(size_t(N) * N * N, glm::vec4(0.0f));
+    for (auto& v : level0)
+      if (U(rng) < 0.002f) v = glm::vec4(0.1f, 0.1f, 0.1f, 0.5f);
+    level0[size_t(N) * N * N - 1] = glm::vec4(1.0f);  // the far corner
+    writeLevel0(ctx, vs, level0);
+    vs.buildEmptySpace();
+    std::vector<uint8_t> map = ctx.download<uint8_t>(vs.emptySpace());
+    ctx.profiler().discard();
+    std::vector<uint8_t> occupied(level0.size());
+    for (size_t v = 0; v < level0.size(); ++v) occupied[v] = level0[v] != glm::vec4(0.0f);
+    size_t offset = 0, mismatches = 0, empty = 0, cells = 0;
+    for (int n = N; n >= 1; n /= 2) {
+      if (n < N) {  // occupied cells of this level from the level below
+        std::vector<uint8_t> parent(size_t(n) * n * n, 0);
+        for (int z = 0; z < 2 * n; ++z)
+          for (int y = 0; y < 2 * n; ++y)
+            for (int x = 0; x < 2 * n; ++x)
+              parent[(size_t(z / 2) * n + y / 2) * n + x / 2] |= occupied[(size_t(z) * 2 * n + y) * 2 * n + x];
+        occupied = parent;
+      }
+      for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+          for (int x = 0; x < n; ++x) {
+            uint8_t any = 0;
+            for (int k = 0; k < 8; ++k) {
+              int cx = x + (k & 1), cy = y + ((k >> 1) & 1), cz = z + (k >> 2);
+              if (cx < n && cy < n && cz < n) any |= occupied[(size_t(cz) * n + cy) * n + cx];
+            }
+            uint8_t got = map[offset + (size_t(z) * n + y) * n + x];
+            mismatches += got != any;
+            empty += any == 0;
+            ++cells;
+          }
+      offset += size_t(n) * n * n;
+    }
+    std::printf("empty-space map %d^3: %zu of %zu cells empty, %zu mismatches\n", N, empty, cells, mismatches);
+    EXPECT_EQ(offset, map.size());
+    EXPECT_GT(empty, cells / 2);
+    EXPECT_EQ(mismatches, 0u);
   }
 }

@@ -475,30 +475,75 @@ inline floatV vct_footprint_lanes(floatV tanHalf, floatV t, float h0, floatV cos
   return fmax(1.0f, fmin(2.0f * tanHalf * t, cap));
 }
 
+#if GI_VW == 16
+#define VCT_UCHARV uchar16
+#elif GI_VW == 8
+#define VCT_UCHARV uchar8
+#else
+#define VCT_UCHARV uchar
+#endif
+
+// Whether the lookup vox_sample_lanes(m, p, d, log2V(diameter)) reads only exactly empty cells, per
+// lane, by the empty-space map (voxel_light.cl, vct_empty_space). The trilinear taps of a level lie
+// inside those of the next coarser one (taps i0, i0 + 1 of level l with i0 = ⌊u − ½⌋, u = p/2^l, lie
+// in the cells 2·i1 … 2·i1 + 3 of level l, i1 = ⌊u/2 − ½⌋), so the map at the first tap of a level at
+// least as coarse as the lookup's coarser level decides: ⌈log2 D⌉ from the float's bits (log2V never
+// rounds above it), clamped to the chain as the lookup's level is. Taps outside the volume weigh 0
+// (a first tap < 0 or ≥ n is clamped into the volume, which can only find more cells occupied).
+// Where it says empty, the lookup's α is exactly 0 and vct_composite_lanes changes nothing.
+__attribute__((always_inline)) inline intV vct_lookup_empty_lanes(VoxelMipsV m, global const uchar* emptySpace,
+                                                                  float3V p, floatV diameter) {
+  uintV bits = as_uintV(diameter);  // ≥ 1
+  intV top = convert_intV(bits >> 23) - 127 + GI_SEL((intV)(0), (intV)(1), (bits & 0x007fffffu) != 0u);
+  top = min(top, (intV)(m.levels - 1));
+  intV shift = (31 - clz(m.N)) - top;
+  floatV scale = as_floatV(convert_uintV(127 - top) << 23);  // 2^−top
+  intV zero = (intV)(0), last = ((intV)(1) << shift) - 1;
+  intV ix = min(max(convert_intV(floor(p.x * scale - 0.5f)), zero), last);
+  intV iy = min(max(convert_intV(floor(p.y * scale - 0.5f)), zero), last);
+  intV iz = min(max(convert_intV(floor(p.z * scale - 0.5f)), zero), last);
+  intV offset = ((intV)(0x09249249) & (((intV)(1) << (3 * top)) - 1)) << (3 * shift + 3);  // vox_level_sample_lanes
+  intV cell = offset + ((((iz << shift) + iy) << shift) + ix);
+  return convert_intV(GI_GATHER(VCT_UCHARV, emptySpace, cell)) == 0;
+}
+
 // vct_cone for GI_VW cones from o along d, of half-angle tan tanHalf, whose axes make cosine cosN
 // with their surfaces' normals: radiance (r, g, b) and opacity a arriving along them, and the AO
-// occlusion.
-inline RgbaV vct_cone_lanes(VoxelMipsV m, float3V o, float3V d, floatV tanHalf, float maxDistance, float stepFactor,
-                            float aoLambda, float h0, floatV cosN, floatV* occlusion) {
+// occlusion. A lane whose step needs no lookup — below the footprint-in-front height, or (with an
+// empty-space map; 0: none) a lookup of only empty cells, whose α = 0 composites nothing — takes
+// its next steps at once, until every lane is done or at a step to sample: each lane's steps,
+// samples and sums are those of vct_cone, only the lookups of empty space are left out.
+inline RgbaV vct_cone_lanes(VoxelMipsV m, global const uchar* emptySpace, float3V o, float3V d, floatV tanHalf,
+                            float maxDistance, float stepFactor, float aoLambda, float h0, floatV cosN,
+                            floatV* occlusion) {
   RgbaV c;
   c.r = c.g = c.b = c.a = (floatV)(0.0f);
   floatV occ = (floatV)(0.0f);
   intV done = (intV)(0);
-  floatV t = (floatV)(0.0f);
+  floatV t = (floatV)(0.0f), step = t;
+  floatV diameter = vct_footprint_lanes(tanHalf, t, h0, cosN);  // at t (vct_cone_advance's first footprint)
+  float3V p;
+  intV sampled;
   float limit = (float)m.N;
   for (;;) {
-    // vct_cone_advance
-    floatV step = fmax(0.5f, stepFactor * vct_footprint_lanes(tanHalf, t, h0, cosN));
-    t += step;
-    floatV diameter = vct_footprint_lanes(tanHalf, t, h0, cosN);
-    floatV margin = 0.5f * diameter;
-    float3V p = addV(o, scaleV(d, t));
-    done = done || t > maxDistance || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin ||
-           p.y > limit + margin || p.z > limit + margin;
+    for (intV advance = !done;;) {
+      // vct_cone_advance of the lanes in `advance`; the others keep their t (and so their p,
+      // diameter and state).
+      floatV stepNext = fmax(0.5f, stepFactor * diameter);
+      step = GI_SEL(step, stepNext, advance);
+      t = GI_SEL(t, t + stepNext, advance);
+      diameter = vct_footprint_lanes(tanHalf, t, h0, cosN);
+      floatV margin = 0.5f * diameter;
+      p = addV(o, scaleV(d, t));
+      done = done || t > maxDistance || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin ||
+             p.y > limit + margin || p.z > limit + margin;
+      // Footprint in front: nothing sampled below h = 2.5 voxels.
+      sampled = !done && h0 + t * cosN - 1.0f >= 1.5f;
+      advance = !done && !sampled;
+      if (emptySpace) advance = advance || (sampled && vct_lookup_empty_lanes(m, emptySpace, p, diameter));
+      if (!GI_ANY(advance)) break;
+    }
     if (GI_ALL(done)) break;
-    // Footprint in front: nothing sampled below h = 2.5 voxels.
-    intV sampled = !done && h0 + t * cosN - 1.0f >= 1.5f;
-    if (!GI_ANY(sampled)) continue;
     RgbaV s = vox_sample_lanes(m, p, d, log2V(diameter));
     vct_composite_lanes(s, sampled, step / diameter, 1.0f / (1.0f + aoLambda * t), &c, &occ);
     done = done || c.a >= 0.99f;
@@ -565,7 +610,7 @@ inline RgbaV vct_diffuse_irradiance_lanes(VoxelMipsV m, float3V p, float3V n, fl
     floatV occ;
     RgbaV r = levelSteps && !footprintInFront
                   ? vct_cone_levels_lanes(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, aoLambda, &occ)
-                  : vct_cone_lanes(m, o, d, (floatV)(VCT_DIFFUSE_TAN_HALF), maxDistance, stepFactor, aoLambda,
+                  : vct_cone_lanes(m, 0, o, d, (floatV)(VCT_DIFFUSE_TAN_HALF), maxDistance, stepFactor, aoLambda,
                                    footprintInFront ? startOffset : INFINITY, (floatV)(cone.z), &occ);
     E.r += cone.w * r.r;
     E.g += cone.w * r.g;

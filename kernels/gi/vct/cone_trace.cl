@@ -12,7 +12,9 @@
 // vct_specular  per pixel (a tile of GI_VW per work-item, cone_lanes.h): adds F_Schlick(F0, n·ωo) · L_cone
 //               along the mirror direction, the cone's half-angle from the GGX width, tan θ = α
 //               (α = roughness²). The BRDF's directional albedo is approximated by F(n·ωo) alone
-//               (no masking term).
+//               (no masking term). emptySpace: the empty-space map (voxel_light.cl), or null:
+//               steps whose lookups read only empty cells are stepped over without a lookup
+//               (same result).
 // vct_bounce    per occupied voxel: its injected direct level-0 radiance plus ρ/π · E_indirect, the
 //               diffuse cones from the voxel's surface point along its normal through the current
 //               mips. Run k − 1 times (re-mipping in between) for k bounces: each run adds one more
@@ -113,7 +115,7 @@ kernel void vct_diffuse(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, int w
   }
 }
 
-kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiView camera,
+kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, global const uchar* emptySpace, GiView camera,
                          global const float4* gPosition, global const float4* gNormal,
                          global const float4* gSpecular, global float4* out) {
   int x0 = get_global_id(0) * VCT_TILE_W, y0 = get_global_id(1) * VCT_TILE_H;
@@ -141,7 +143,7 @@ kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, GiVi
   float3V p = f3v((px - origin.x) / grid.voxel_size, (py - origin.y) / grid.voxel_size,
                   (pz - origin.z) / grid.voxel_size);
   floatV occ;
-  RgbaV c = vct_cone_lanes(vox_mips_lanes(vct_mips(grid, tp, iso, aniso, sh, shAniso)),
+  RgbaV c = vct_cone_lanes(vox_mips_lanes(vct_mips(grid, tp, iso, aniso, sh, shAniso)), emptySpace,
                            addV(p, scaleV(n, (floatV)(tp.startOffset))), r, tanHalf, tp.maxDistance, tp.stepFactor,
                            tp.aoLambda, tp.footprintInFront ? tp.startOffset : INFINITY, dotV(r, n), &occ);
   // fresnel_schlick(F0, n·ωo) lane-wise

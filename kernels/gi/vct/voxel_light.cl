@@ -13,6 +13,10 @@
 // vct_mip_anisotropic_first (level 1) / vct_mip_anisotropic (levels ≥ 2): per parent and direction,
 //   the 2 children along the axis composited front to back (c = c_f + (1 − α_f)·c_b,
 //   α = α_f + (1 − α_f)·α_b), the 4 columns averaged; one work-item per parent for all 6 directions.
+// vct_occupied_first / vct_occupied_level / vct_empty_space_first / vct_empty_space: the
+//   empty-space map of the specular march (cone_lanes.h, vct_cone_lanes), one byte per cell of
+//   every level: 0 where the 2×2×2 block of cells i … i + 1 of the level (the part inside the
+//   volume) is exactly empty, α = 0 and radiance 0 (below).
 // SH voxels (vct.voxels=sh, voxel_types.h), after the radiance mips:
 // vct_sh_project: level 0, per voxel and channel the SH coefficients L·α·lobe(n) of its radiance
 //   (level 0 of the radiance chain), n its mean normal (both lobes when the normals cancel).
@@ -370,4 +374,77 @@ kernel void vct_mip_sh_anisotropic(int N, int level, global const float4* iso, g
     }
   global float4* out = shAniso + 3 * (vox_aniso_offset(N, level, dir) + v);
   for (int ch = 0; ch < 3; ++ch) out[ch] = sum[ch] * 0.25f;
+}
+
+// The empty-space map (VoxelScene::buildEmptySpace; cone_lanes.h, vct_cone_lanes): map[offset(l) + i]
+// (offset as in `iso`, one byte per cell) is 0 when no level-0 voxel under the cells i … i + 1 of
+// level l along each axis (those inside the volume) has its occupancy bit set, else 1. Level 0 is
+// zero wherever the bit is clear (buildMips' contract), and every mip cell (isotropic mean,
+// anisotropic front-to-back composites, SH coefficients) is a sum of products of its children, so
+// it is exactly 0 when they all are: a trilinear lookup at level l whose 8 taps start at cell i
+// reads only zeros where the map is 0. occupied[offset(l) − N³ + c] (scratch, levels ≥ 1): 1 if a
+// voxel under cell c of level l is occupied.
+
+// Level 1 of `occupied`: a cell's 8 children are bits 2x, 2x + 1 of 4 occupancy rows (2x is even,
+// so both bits lie in one word).
+kernel void vct_occupied_first(int N, global const uint* occupancy, global uchar* occupied) {
+  int n = N >> 1;
+  size_t c = get_global_id(0);
+  if (c >= (size_t)n * n * n) return;
+  int3 cell = vox_cell(c, n);
+  size_t first = ((size_t)(2 * cell.z) * N + 2 * cell.y) * N + 2 * cell.x, row = (size_t)N, slice = (size_t)N * N;
+  uint any = occupancy[first >> 5] | occupancy[(first + row) >> 5] | occupancy[(first + slice) >> 5] |
+             occupancy[(first + slice + row) >> 5];
+  occupied[c] = (uchar)(((any >> (first & 31)) & 3u) != 0u);
+}
+
+// Level `level` ≥ 2 of `occupied` from the level below: any of the 8 children.
+kernel void vct_occupied_level(int N, int level, global uchar* occupied) {
+  int n = N >> level, nc = 2 * n;
+  size_t c = get_global_id(0);
+  if (c >= (size_t)n * n * n) return;
+  int3 cell = vox_cell(c, n);
+  size_t N3 = (size_t)N * N * N;
+  global const uchar* child = occupied + (vox_level_offset(N, level - 1) - N3) +
+                              ((size_t)(2 * cell.z) * nc + 2 * cell.y) * nc + 2 * cell.x;
+  size_t row = (size_t)nc, slice = (size_t)nc * nc;
+  uint any = child[0] | child[1] | child[row] | child[row + 1] | child[slice] | child[slice + 1] |
+             child[slice + row] | child[slice + row + 1];
+  occupied[vox_level_offset(N, level) - N3 + c] = (uchar)(any != 0u);
+}
+
+// Level 0 of the map from the occupancy bits, one work-item per word (32 voxels along x, N ≥ 32):
+// per row of the block (y, z), (y + 1, z), (y, z + 1), (y + 1, z + 1) (rows past the grid left out),
+// bit b | bit b + 1 (the next word's bit 0 for b = 31, none past the row's end).
+kernel void vct_empty_space_first(int N, global const uint* occupancy, global uchar* map) {
+  int wordsPerRow = N >> 5;
+  size_t w = get_global_id(0);
+  if (w >= (size_t)N * N * wordsPerRow) return;
+  int xWord = (int)(w % wordsPerRow);
+  size_t rowIndex = w / wordsPerRow;
+  int y = (int)(rowIndex % N), z = (int)(rowIndex / N);
+  int dy = y + 1 < N ? 1 : 0, dz = z + 1 < N ? 1 : 0;
+  size_t rows[4] = {w, w + (size_t)dy * wordsPerRow, w + (size_t)dz * N * wordsPerRow,
+                    w + ((size_t)dz * N + dy) * wordsPerRow};
+  uint m = 0u;
+#pragma unroll
+  for (int r = 0; r < 4; ++r) {
+    uint word = occupancy[rows[r]], next = xWord + 1 < wordsPerRow ? occupancy[rows[r] + 1] : 0u;
+    m |= word | (word >> 1) | (next << 31);
+  }
+  uint16 bit = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  vstore16(convert_uchar16(((uint16)(m) >> bit) & 1u), 0, map + 32 * w);
+  vstore16(convert_uchar16(((uint16)(m >> 16) >> bit) & 1u), 0, map + 32 * w + 16);
+}
+
+// Level `level` ≥ 1 of the map from `occupied`: any of the cells i … i + 1 inside the volume.
+kernel void vct_empty_space(int N, int level, global const uchar* occupied, global uchar* map) {
+  int n = N >> level;
+  size_t c = get_global_id(0);
+  if (c >= (size_t)n * n * n) return;
+  int3 i = vox_cell(c, n);
+  int dx = i.x + 1 < n ? 1 : 0, dy = i.y + 1 < n ? n : 0, dz = i.z + 1 < n ? n * n : 0;
+  global const uchar* o = occupied + (vox_level_offset(N, level) - (size_t)N * N * N) + c;
+  uint any = o[0] | o[dx] | o[dy] | o[dy + dx] | o[dz] | o[dz + dx] | o[dz + dy] | o[dz + dy + dx];
+  map[vox_level_offset(N, level) + c] = (uchar)(any != 0u);
 }

@@ -29,6 +29,7 @@ public:
   void setup(const FrameResources& f) override {
     int res = f.params.getInt("vct.resolution");
     voxels_ = std::make_unique<VoxelScene>(f.ctx, f.scene, res);
+    voxelized_ = emptySpaceBuilt_ = false;
     upsampler_ = std::make_unique<GeometryAwareUpsampler>(f.ctx, "vct: upsample");
   }
 
@@ -67,6 +68,7 @@ public:
     if (!voxelized_ || !p.getBool("vct.static")) {
       voxels_->voxelize(f.deviceScene);
       voxelized_ = true;
+      emptySpaceBuilt_ = false;
     }
     voxels_->inject(f.deviceScene, f.shadowMaps);
     auto buildMips = [&] {
@@ -116,7 +118,17 @@ public:
       upsampler_->run(g, low_, down, t, indirect);
     }
     if (p.getBool("vct.specular")) {
-      specular_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, g.view, g.position, g.normal, g.specular, indirect);
+      // With anisotropic mips the specular march steps over the lookups the empty-space map shows
+      // empty (cone_lanes.h; the map depends on the occupancy bits only, voxel_scene.h). With
+      // isotropic mips a lookup reads one volume, not three, and the stepping passes cost what
+      // the skipped lookups save (docs/PERFORMANCE.md, *Specular cone: empty-space skip*): no map
+      // (a null buffer: the kernel skips nothing).
+      if (anisotropic && !emptySpaceBuilt_) {
+        voxels_->buildEmptySpace();
+        emptySpaceBuilt_ = true;
+      }
+      specular_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, anisotropic ? voxels_->emptySpace() : noMap_,
+                     g.view, g.position, g.normal, g.specular, indirect);
       int tileW = vctLaneTileWidth(lanes_), tileH = lanes_ / tileW;
       int itemsX = (g.width + tileW - 1) / tileW, itemsY = (g.height + tileH - 1) / tileH;
       f.ctx.launch(specular_, cl::NDRange::d2(cl::roundUp(itemsX, 8), cl::roundUp(itemsY, 8), 8, 8),
@@ -129,6 +141,8 @@ private:
   std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   cl::Program program_;
   cl::Kernel diffuse_, specular_, bounce_;
+  bool emptySpaceBuilt_ = false;  // the empty-space map matches the current voxelization
+  cl::Buffer noMap_;               // null: vct_specular without an empty-space map
   cl::Buffer low_, bounced_, direct_;
   int cones_ = 0, down_ = 0, lanes_ = 1;
   bool sh_ = false, voxelized_ = false;

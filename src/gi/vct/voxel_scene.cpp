@@ -72,6 +72,10 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   shProject_ = lightProgram_.kernel("vct_sh_project");
   shMipIso_ = lightProgram_.kernel("vct_mip_sh_isotropic");
   shMipAniso_ = lightProgram_.kernel("vct_mip_sh_anisotropic");
+  occupiedFirst_ = lightProgram_.kernel("vct_occupied_first");
+  occupiedLevel_ = lightProgram_.kernel("vct_occupied_level");
+  emptySpaceFirst_ = lightProgram_.kernel("vct_empty_space_first");
+  emptySpaceLevel_ = lightProgram_.kernel("vct_empty_space");
   instanceEmits_ = ctx.upload(instanceEmissionFlags(scene), "vct instance emission flags");
   uint64_t n = voxelCount();
   uint64_t chain = 0;
@@ -165,6 +169,32 @@ void VoxelScene::buildMips(bool anisotropic) {
       mipIso_.args(N, l, iso_);
       ctx_.launch(mipIso_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (isotropic)");
     }
+  }
+}
+
+void VoxelScene::buildEmptySpace() {
+  int N = grid_.resolution;
+  uint64_t n = voxelCount(), cells = 0;
+  for (int l = 0; l < grid_.levels; ++l) cells += n >> (3 * l);
+  if (!emptySpace_) {
+    ctx_.requireAllocation(2 * cells - n, "vct empty-space map (vct.resolution)");
+    emptySpace_ = cl::Buffer(ctx_, cells, CL_MEM_READ_WRITE, "vct empty-space map");
+    occupiedLevels_ = cl::Buffer(ctx_, std::max<uint64_t>(cells - n, 1), CL_MEM_READ_WRITE, "vct occupied levels");
+  }
+  uint64_t words = n / 32;  // N ≥ 32: whole words per row
+  emptySpaceFirst_.args(N, occupancy_, emptySpace_);
+  ctx_.launch(emptySpaceFirst_, cl::NDRange::d1(cl::roundUp(words, 64), 64), "vct: empty space");
+  for (int l = 1; l < grid_.levels; ++l) {
+    uint64_t levelCells = n >> (3 * l);
+    if (l == 1) {
+      occupiedFirst_.args(N, occupancy_, occupiedLevels_);
+      ctx_.launch(occupiedFirst_, cl::NDRange::d1(cl::roundUp(levelCells, 64), 64), "vct: empty space");
+    } else {
+      occupiedLevel_.args(N, l, occupiedLevels_);
+      ctx_.launch(occupiedLevel_, cl::NDRange::d1(cl::roundUp(levelCells, 64), 64), "vct: empty space");
+    }
+    emptySpaceLevel_.args(N, l, occupiedLevels_, emptySpace_);
+    ctx_.launch(emptySpaceLevel_, cl::NDRange::d1(cl::roundUp(levelCells, 64), 64), "vct: empty space");
   }
 }
 

@@ -57,6 +57,13 @@ public:
   void buildShVoxels(bool anisotropic, ShLobe lobe);
   void projectSh(ShLobe lobe);        // level 0 only
   void buildShMips(bool anisotropic);  // levels ≥ 1 only
+  // The empty-space map of the specular march (kernels/gi/vct/voxel_light.cl, vct_empty_space):
+  // one byte per cell of every level, 0 where the cells i … i + 1 of the level are exactly empty in
+  // every chain. From the occupancy bits (buildMips' contract); valid for the mips built from the
+  // current level 0 (build it after the last buildMips of a frame, or any time after voxelize: it
+  // depends on the bits only).
+  void buildEmptySpace();
+  const cl::Buffer& emptySpace() const { return emptySpace_; }  // allocated on first use
 
   const cl::Buffer& accumulators() const { return acc_; }  // GI_VOX_RECORD words per voxel (voxel_types.h)
   cl::Buffer& iso() { return iso_; }      // float4 per voxel, all isotropic levels (voxel_grid.h)
@@ -64,7 +71,7 @@ public:
   cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (allocated on first use)
   cl::Buffer& sh() { return sh_; }            // 3 float4 per voxel of iso (allocated on first use)
   cl::Buffer& shAniso() { return shAniso_; }  // 3 float4 per voxel of aniso (allocated on first use)
-  uint64_t bytes() const { return acc_.bytes() + occupied_.bytes() + occupancy_.bytes() + spanCounts_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes() + triangleSetup_.bytes() + columnStart_.bytes(); }
+  uint64_t bytes() const { return acc_.bytes() + occupied_.bytes() + occupancy_.bytes() + spanCounts_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes() + emptySpace_.bytes() + occupiedLevels_.bytes() + triangleSetup_.bytes() + columnStart_.bytes(); }
   // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes)
   // (+ SH coefficients of the chains used).
   static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false);
@@ -79,7 +86,8 @@ private:
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
   int injectLanes_ = 1;  // GI_VW of lightProgram_ (occupied voxels per vct_inject block)
-  cl::Kernel clear_, occupancyCount_, scan_, occupancyList_, triangleColumns_, voxelize_, voxelizeTrianglewise_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_;
+  cl::Kernel clear_, occupancyCount_, scan_, occupancyList_, triangleColumns_, voxelize_, voxelizeTrianglewise_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_,
+      occupiedFirst_, occupiedLevel_, emptySpaceFirst_, emptySpaceLevel_;
   // occupied_: the voxels the last voxelization touched (count in occupiedCount_), in increasing
   // order, built from their bits in occupancy_ (1 bit per voxel) through per-span counts.
   static constexpr uint64_t kOccupancySpanVoxels = 64 * 32;  // GI_VOX_SPAN_WORDS words (voxelize.cl)
@@ -92,6 +100,8 @@ private:
   static constexpr uint32_t kVoxelizeWorkItems = 8192;
   static constexpr uint32_t kClearEntriesPerItem = 32;  // GI_VOX_CLEAR_ENTRIES (voxelize.cl)
   cl::Buffer instanceEmits_, acc_, occupied_, occupiedCount_, occupancy_, spanCounts_, iso_, aniso_, sh_, shAniso_;
+  // The empty-space map (bytes, levels 0 …) and its scratch: per cell of levels ≥ 1, any voxel occupied.
+  cl::Buffer emptySpace_, occupiedLevels_;
 
   // The 6 directional volumes of levels ≥ 1, float4 each, and the chain's zero end record.
   uint64_t anisoBytes() const;
