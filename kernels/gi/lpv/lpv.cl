@@ -580,8 +580,10 @@ typedef float lpv_floatL_unaligned __attribute__((ext_vector_type(LPV_LANES), al
 // no-op elsewhere.
 #if defined(__x86_64__)
 #define LPV_PREFETCH(p) __builtin_prefetch((const void*)(size_t)(p), 0, 3)
+#define LPV_PREFETCH_WRITE(p) __builtin_prefetch((const void*)(size_t)(p), 1, 3)
 #else
 #define LPV_PREFETCH(p)
+#define LPV_PREFETCH_WRITE(p)
 #endif
 
 // Adds the light channel `in` (4 coefficients, grid units) of the neighbour in direction `dir`
@@ -640,6 +642,25 @@ inline void lpv_propagate_step(global const float* src, global float* dst, globa
   // one line per plane: −13 % CPU time (docs/PERFORMANCE.md).
 #pragma unroll
   for (int p = 0; p < 12; ++p) LPV_PREFETCH(src + row + LPV_SLICE + LPV_ROW + p * LPV_N);
+  // When a step's working set (3 grids and the face factors, 204 bytes per cell: 53.5 MB at 64³)
+  // exceeds the last-level cache (LPV_PREFETCH_STREAMS, set by the host from the device's global
+  // memory cache size), every stream comes from DRAM and waits on it: the next work-group's face
+  // factors, destination row and accumulated row are prefetched too (−30 to −57 % CPU at 64³,
+  // docs/PERFORMANCE.md). Where the grids stay in cache (32³: 6.7 MB) these 54 more prefetches
+  // per work-item cost more than they save (+8 %), so they are left out there.
+#if LPV_PREFETCH_STREAMS
+  if (blocking) {
+    global const half* nextFactors = faceFactors + LPV_PAD + LPV_FACTOR_AT(k, 0, x0, y, z) + LPV_FACTOR_ROW;
+#pragma unroll
+    for (int p = 0; p < 30; ++p) LPV_PREFETCH(nextFactors + p * LPV_N);
+  }
+#pragma unroll
+  for (int p = 0; p < 12; ++p) LPV_PREFETCH_WRITE(dst + row + LPV_ROW + p * LPV_N);
+  if (accumulate & LPV_ADD_THIS) {
+#pragma unroll
+    for (int p = 0; p < 12; ++p) LPV_PREFETCH_WRITE(accumulated + row + LPV_ROW + p * LPV_N);
+  }
+#endif
   floatL o[3][4];
 #pragma unroll
   for (int ch = 0; ch < 3; ++ch) o[ch][0] = o[ch][1] = o[ch][2] = o[ch][3] = (floatL)(0.0f);
