@@ -4,15 +4,21 @@
 //     sample's rotations that the wall blocks — analytic, ½ at the corner itself, where the wall
 //     covers half of the hemisphere's solid angle — within 5 % of that corner value;
 //   - the depth-aware blur never mixes values across a depth discontinuity;
+//   - the 4-byte depth-plane records equal their host encoding and hold the tangent plane of the
+//     G-buffer within the encoding's stated precision;
 //   - the occlusion kernel equals a host implementation of the same formulas (occlusion and the
-//     eq. 3.5 colour-bleeding irradiance), and the blur + composition equals its host mirror;
+//     eq. 3.5 colour-bleeding irradiance; the planes rounded as the records round them), and the
+//     blur + composition equals its host mirror;
 //   - chains: `vpl+ssao` is (1 − occlusion) × `vpl`; malformed chains are rejected;
 //   - the first four again with ssao.downsample = 2 (occlusion on the half-resolution grid, the
 //     depth-aware blur per camera pixel over the grid).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "gi/ssao/ssao_technique.h"
@@ -98,6 +104,65 @@ struct PlaneTest {
     return glm::dot(n, P - C) / glm::dot(n, Q - C) - 1.0f;
   }
   bool accepts(int p, int q, float tau) const { return pos[4 * q + 3] != 0.0f && std::fabs(offset(p, q)) <= tau; }
+};
+
+// Host mirror of the depth-plane record (ssao_encode_record in kernels/gi/ssao/ssao.cl): A = 1/depth
+// in the upper 16 bits (5-bit exponent offset by the frame's base, 11 mantissa bits, rounded to
+// nearest), the relative gradient g of 1/depth per pixel in the lower 16 bits (shared 4-bit
+// exponent E, two 6-bit two's complement mantissas, g = m·2^(E−15)).
+uint32_t bitsOf(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return u;
+}
+float floatOf(uint32_t u) {
+  float f;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+int invDepthBase(float znear) { return 224 - int(bitsOf(znear) >> 23); }
+uint32_t encodeRecord(float A, float gx, float gy, int base) {
+  int a = (int(bitsOf(A)) + 0x800) >> 12;
+  uint32_t wa = uint32_t(std::clamp(a - (base << 11), 0, 0xffff));
+  float M = std::max(std::fabs(gx), std::fabs(gy));
+  int E = std::clamp(int(bitsOf(M) >> 23) - 116, 0, 15);
+  if (E < 15 && M * floatOf(uint32_t(142 - E) << 23) >= 31.5f) ++E;  // rounding would reach 32
+  float scale = floatOf(uint32_t(142 - E) << 23);                    // 2^(15−E)
+  int mx = std::clamp(int(std::nearbyint(gx * scale)), -31, 31), my = std::clamp(int(std::nearbyint(gy * scale)), -31, 31);
+  return wa << 16 | uint32_t(E) << 12 | uint32_t(mx & 63) << 6 | uint32_t(my & 63);
+}
+struct PlaneRecord {
+  float A, gx, gy;
+  int E;
+};
+PlaneRecord decodeRecord(uint32_t w, int base) {
+  float scale = floatOf(((w << 11) & 0x07800000u) + (112u << 23));  // 2^(E−15)
+  return {floatOf(((w >> 4) & 0x0ffff000u) + (uint32_t(base) << 23)), float(int32_t(w << 20) >> 26) * scale,
+          float(int32_t(w << 26) >> 26) * scale, int((w >> 12) & 15)};
+}
+
+// The camera's pinhole projection from its matrices (not ssaoProjection, which the kernels use): a
+// camera-space point (x, y, depth) projects to (cx + fx·x/depth, cy − fy·y/depth).
+struct Pinhole {
+  float fx, fy, cx, cy;
+  Pinhole(const GiView& v, int W, int H) {
+    glm::mat4 P = glm::make_mat4(v.view_proj) * glm::inverse(glm::make_mat4(v.view));
+    fx = 0.5f * W * P[0][0], cx = 0.5f * W * (1.0f - P[2][0]);
+    fy = 0.5f * H * P[1][1], cy = 0.5f * H * (1.0f + P[2][1]);
+  }
+  // The tangent plane of the surface seen at camera pixel (x, y) (1/depth A, camera-space normal
+  // n facing the camera) as the record holds it: g = (n.x/fx, −n.y/fy)/(n·r), r the pixel centre's
+  // ray with depth 1.
+  void gradient(glm::vec3 n, int x, int y, float& gx, float& gy) const {
+    glm::vec3 r((x + 0.5f - cx) / fx, (cy - y - 0.5f) / fy, 1.0f);
+    float nr = glm::dot(n, r);
+    nr = std::copysign(std::max(std::fabs(nr), 1e-12f), nr);
+    gx = n.x / fx / nr, gy = -n.y / fy / nr;
+  }
+  // The plane 1/depth(s) = A·(1 + g·(s − centre of pixel (x, y))) as n'·c = 1 in camera space.
+  glm::vec3 planeNormal(const PlaneRecord& p, int x, int y) const {
+    return p.A * glm::vec3(p.gx * fx, -p.gy * fy, 1.0f - p.gx * (x + 0.5f - cx) - p.gy * (y + 0.5f - cy));
+  }
 };
 
 void flatFloorHasNoOcclusion(int downsample) {
@@ -307,6 +372,8 @@ void kernelMatchesHostImplementation(int downsample) {
     return glm::vec3(c.x, c.y, -c.z);
   };
   glm::mat4 invView = glm::inverse(view);
+  const Pinhole pinhole(g.view, W, H);
+  const int base = invDepthBase(g.view.znear);
   auto v3 = [](const std::vector<float>& b, int i) { return glm::vec3(b[4 * i], b[4 * i + 1], b[4 * i + 2]); };
   int exact = 0, surfaces = 0;
   for (int y = 0; y < grid.gh; ++y)
@@ -337,10 +404,15 @@ void kernelMatchesHostImplementation(int downsample) {
         int q = grid.camera(int(tx), int(ty));
         if (pos[4 * q + 3] == 0.0f) continue;
         // Occluded when S lies more than the bias behind the tangent plane of the surface seen at q
-        // (G-buffer position and geometric normal, which faces the camera).
-        glm::vec3 Q = toCamera(v3(pos, q), 1.0f), nq = toCamera(v3(gn, q), 0.0f);
-        if (!(glm::dot(S - Q, nq) < -st.bias)) continue;
-        if (!(std::fabs(depth[q] - depth[p]) < st.radius)) continue;
+        // (G-buffer depth and geometric normal, which faces the camera), rounded as the record rounds
+        // it: n'·S − 1 > bias·|n'| for the plane n'·c = 1, and the range check on its depth 1/A.
+        int qx = D * int(tx), qy = D * int(ty);
+        float gx, gy;
+        pinhole.gradient(toCamera(v3(gn, q), 0.0f), qx, qy, gx, gy);
+        PlaneRecord rec = decodeRecord(encodeRecord(1.0f / depth[q], gx, gy, base), base);
+        glm::vec3 nq = pinhole.planeNormal(rec, qx, qy);
+        if (!(glm::dot(nq, S) - 1.0f > st.bias * glm::length(nq))) continue;
+        if (!(std::fabs(1.0f / rec.A - depth[p]) < st.radius)) continue;
         ++occluded;
         glm::vec3 v = v3(pos, q) - Pw;
         float d2 = glm::dot(v, v), invD = 1.0f / std::sqrt(std::max(d2, 1e-30f));
@@ -348,8 +420,8 @@ void kernelMatchesHostImplementation(int downsample) {
         E += v3(direct, q) * (As * cosS * cosR / std::max(d2, d2min));
       }
       float occH = float(occluded) / st.samples;
-      // Rounding (FMA contraction, the kernel's depth-reconstructed P and half-float plane
-      // gradients) may flip a sample lying on a decision boundary.
+      // Rounding (FMA contraction, the kernel's depth-reconstructed P and projection) may flip a
+      // sample lying on a decision boundary.
       ASSERT_LE(std::fabs(occK[k] - occH), 1.5f / st.samples) << "grid pixel " << x << "," << y;
       if (occK[k] != occH) continue;
       ++exact;
@@ -399,6 +471,66 @@ void kernelMatchesHostImplementation(int downsample) {
 }
 
 }  // namespace
+
+namespace {
+
+// The records of ssao: depth planes against the G-buffer: every record equals its host encoding
+// (up to rounding-boundary cases of the kernel's float arithmetic) and decodes to the exact tangent
+// plane within the stated precision: A within 2⁻¹² relative, each gradient component within
+// 2^(E−16), which is at most 1/31.5 of the larger component when E > 0.
+void depthPlaneRecordsHoldTheTangentPlanes(const Scene& s, int W, int H) {
+  Renderer r(context(), s, directSettings(W, H));
+  r.renderFrame();
+  FrameResources f = r.frameResources(false);
+  SsaoTechnique t;
+  t.setup(f);
+  t.occlusionPass(f, settingsFor(r, 0.1f, false, 1));
+  auto rec = download<uint32_t>(t.depthPlaneRecords());
+  const GBuffer& g = r.gbuffer();
+  auto depth = download<float>(g.visibility.depth), gn = download<float>(g.geoNormal);
+  const glm::mat4 view = glm::make_mat4(g.view.view);
+  const Pinhole pinhole(g.view, W, H);
+  const int base = invDepthBase(g.view.znear);
+  int surfaces = 0, identical = 0, maxE = 0;
+  double worstA = 0, worstG = 0;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      int p = y * W + x;
+      if (!std::isfinite(depth[p])) {
+        ASSERT_EQ(rec[p], 0u) << "background pixel " << x << "," << y;
+        continue;
+      }
+      ++surfaces;
+      glm::vec4 c = view * glm::vec4(gn[4 * p], gn[4 * p + 1], gn[4 * p + 2], 0.0f);
+      float A = 1.0f / depth[p], gx, gy;
+      pinhole.gradient(glm::vec3(c.x, c.y, -c.z), x, y, gx, gy);
+      identical += rec[p] == encodeRecord(A, gx, gy, base);
+      PlaneRecord d = decodeRecord(rec[p], base);
+      double errA = std::fabs(double(d.A) - A) / A, errG = std::max(std::fabs(d.gx - gx), std::fabs(d.gy - gy));
+      double M = std::max(std::fabs(gx), std::fabs(gy)), bound = std::ldexp(1.0, d.E - 16);
+      // The kernel's 1/depth may differ from the host's by an ulp (1.2e-7 relative).
+      ASSERT_LE(errA, std::ldexp(1.0, -12) + 2.5e-7) << "pixel " << x << "," << y;
+      // The kernel's g differs from the host's by float rounding (1e-5 relative).
+      ASSERT_LE(errG, bound + 1e-5 * M) << "pixel " << x << "," << y << ", E " << d.E;
+      if (d.E > 0) ASSERT_LE(bound, M / 31.5 * 1.0001) << "pixel " << x << "," << y << ", E " << d.E;
+      worstA = std::max(worstA, errA);
+      worstG = std::max(worstG, M > 0 ? errG / M : 0.0);
+      maxE = std::max(maxE, d.E);
+    }
+  std::printf("%s %dx%d: %d of %d records identical to the host encoding; largest errors: A %.2e relative, "
+              "g %.2e of the larger component; largest E %d\n",
+              s.name.c_str(), W, H, identical, surfaces, worstA, worstG, maxE);
+  EXPECT_GE(identical, int(0.99 * surfaces));
+}
+
+}  // namespace
+
+TEST(Ssao, DepthPlaneRecordsHoldTheTangentPlanes) {
+  depthPlaneRecordsHoldTheTangentPlanes(makeCornellBox(), 64, 64);
+  Scene corner = floorAndWall(true, -1.0f);
+  corner.cameras.push_back(lookAtCamera(glm::vec3(0, 1.2f, 1.0f), glm::vec3(0, 0.2f, -1.0f), 1.0f));
+  depthPlaneRecordsHoldTheTangentPlanes(corner, 200, 150);
+}
 
 TEST(Ssao, KernelMatchesHostImplementation) { kernelMatchesHostImplementation(1); }
 TEST(Ssao, KernelMatchesHostImplementationHalfResolution) { kernelMatchesHostImplementation(2); }

@@ -20,6 +20,7 @@ typedef ulong16 ulongV;
 #define convert_longV convert_long16
 #define convert_ulongV convert_ulong16
 #define as_uintV as_uint16
+#define as_intV as_int16
 #define as_floatV as_float16
 #define convert_uintV convert_uint16
 #define vloadV vload16
@@ -93,6 +94,7 @@ typedef ulong8 ulongV;
 #define convert_longV convert_long8
 #define convert_ulongV convert_ulong8
 #define as_uintV as_uint8
+#define as_intV as_int8
 #define as_floatV as_float8
 #define convert_uintV convert_uint8
 #define vloadV vload8
@@ -147,6 +149,7 @@ typedef ulong ulongV;
 #define convert_longV convert_long
 #define convert_ulongV convert_ulong
 #define as_uintV as_uint
+#define as_intV as_int
 #define as_floatV as_float
 #define convert_uintV convert_uint
 #define vloadV(i, p) ((p)[i])

@@ -40,16 +40,21 @@
 #ifndef GI_SSAO_DOWN
 #define GI_SSAO_DOWN 1
 #endif
+// 1: ssao_occlusion also sums the eq. 3.5 bleeding irradiance. A build option rather than an
+// argument: without it the sample loop carries no bleeding state (registers the AVX-512 build
+// otherwise spills; ≈ 10 % of the occlusion's CPU time).
+#ifndef GI_SSAO_BLEEDING
+#define GI_SSAO_BLEEDING 0
+#endif
 
 // How (PERFORMANCE_FACTS.md): one work-item handles GI_VW adjacent pixels of a row as lanes of
 // floatV (16 on CPU devices, 1 on GPUs); every per-pixel branch of the formulas above is a lane
 // mask, the sample loop has a constant trip count and is unrolled, and the surfaces seen at the
-// projected samples are gathered — one 8-byte depth-plane record each (ssao_depth_planes), in camera
-// space, so that a sample costs one division to project and the records a work-group touches stay in
-// the L2 cache. The record's two words are read as two 32-bit gathers (GI_GATHER of uint: vpgatherdd
-// on AVX2/AVX-512) rather than one 64-bit load per lane, which compiled to a per-lane index
-// extraction, load and insertion (≈ 64 instructions per sample and 16 lanes). A group cut by the right image border reads
-// its last pixel repeatedly and stores only its valid lanes.
+// projected samples are gathered — one 4-byte depth-plane record each (ssao_depth_planes), in
+// camera space, so that a sample costs one division to project and one 32-bit hardware gather on
+// AVX2/AVX-512 (GI_GATHER of uint), and the 0.9 MB of records at 640×360 stay in a 1 MB L2 cache
+// (8-byte records took 1.7× the CPU time on the 2-core EPYC, docs/PERFORMANCE.md). A group cut by
+// the right image border reads its last pixel repeatedly and stores only its valid lanes.
 
 // Loads GI_VW float4 of `plane` starting at pixel i into four floatV (valid lanes, the rest repeat).
 #define SSAO_LOAD4(plane, i, valid, X, Y, Z, W)                                   \
@@ -87,40 +92,54 @@ inline void ssao_store1(global float* plane, int i, int valid, floatV v) {
 // depth); a point projects to the pixel coordinates sx = cx + fx·c.x/c.z, sy = cy − fy·c.y/c.z
 // (`projection` = (fx, fy, cx, cy), derived on the host from the camera's matrices).
 
-// The relative screen-space gradients of 1/depth are stored as IEEE half floats (bit patterns: the
-// kernels do not need cl_khr_fp16; ssao_half_value reads the half in the upper 16 bits of h). Magnitudes below the smallest normal half (6.1e-5 per pixel:
-// a relative depth change under 5e-5 within the 0.71 px a sample is extrapolated) become 0, above
-// 65504 they are clamped; rounding to nearest.
-inline uintV ssao_half_bits(floatV v) {
-  floatV a = fmin(fabs(v), 65504.0f);
-  uintV h = GI_SEL((as_uintV(a) - (112u << 23) + 0x1000u) >> 13, (uintV)(0u), a < 6.103515625e-05f);
-  return h | ((as_uintV(v) >> 16) & 0x8000u);
-}
-
-inline floatV ssao_half_value(uintV h) {
-  // Sign in place, exponent and mantissa moved to a float's, then the exponent rebias 15 -> 127
-  // by an exact multiplication.
-  return as_floatV(((h >> 3) & 0x0fffe000u) | (h & 0x80000000u)) * 0x1p112f;
-}
-
-// What the occlusion test of a sample needs about the surface seen at pixel q, in 8 bytes so that a
-// sample costs two 32-bit gathers and the records of the sample window stay in the L2 cache:
-//   word 0: A = 1/depth at q's centre (0 on the background: fails every test below);
-//   word 1: the half floats (g_x, g_y), the screen-space gradient of 1/depth over the tangent plane
-//           of q's surface (geometric normal n), relative to A.
+// What the occlusion test of a sample needs about the surface seen at pixel q, in one 32-bit word
+// so that a sample costs one 32-bit gather and the records of the sample window (4 bytes per
+// pixel) stay in the L2 cache:
+//   A = 1/depth at q's centre and (g_x, g_y), the screen-space gradient of 1/depth over the tangent
+//   plane of q's surface (geometric normal n), relative to A.
 // 1/depth is affine in screen coordinates over a plane (perspective-correct interpolation), so
 //   1/depth of that plane at pixel coordinates s = A·(1 + g·(s − centre of q))   exactly;
 // for the plane n·c = w: 1/depth(s) = n·r(s)/w with the ray r(s) = ((sx − cx)/fx, (cy − sy)/fy, 1),
-// hence g = (n.x/fx, −n.y/fy)/(n·r(q)). GI_VW pixels of a row per work-item (lanes).
+// hence g = (n.x/fx, −n.y/fy)/(n·r(q)).
+// Encoding (ssao_encode_record; tests/ssao_test.cpp mirrors it on the host):
+//   bits 16–31: A as an unsigned float with a 5-bit exponent and 11 mantissa bits, rounded to
+//     nearest (relative error ≤ 2⁻¹²), i.e. the top 16 bits of A's float bits with the exponent
+//     field offset by the frame's base b = ssao_inv_depth_base(znear): the 32 exponents cover
+//     depths from ≈ znear/2 to ≈ 2²⁹·znear (beyond: clamped); code 0 (the background) decodes to
+//     the smallest A, a plane ≈ 2²⁹·znear away that fails every test below;
+//   bits 0–15: the gradient with a shared exponent E (bits 12–15) and two 6-bit two's complement
+//     mantissas m_x (bits 6–11), m_y (bits 0–5), g = m·2^(E−15): E is the smallest in 0..15 with
+//     |m| ≤ 31 for both, so each component is within 2^(E−16) of the exact one, which is ≤ 1/31.5
+//     of the larger component (or ≤ 2⁻¹⁶ when E = 0); |g| is clamped at 31 per pixel (a plane
+//     within 1/31 px of edge-on).
+// At a sample (at most ½ px from q's centre in x and y) the decoded plane's relative 1/depth is
+// therefore within 2⁻¹² + 2^(E−16) of the exact plane's: along the plane's normal that is at most
+// 2⁻¹² of the distance to the camera plus depth/(31.5·f) (f: focal length in pixels; a 32nd of a
+// pixel's footprint), against the bias of 1 % of R.
+inline int ssao_inv_depth_base(float znear) { return 224 - (as_int(znear) >> 23); }
+
+inline uintV ssao_encode_record(floatV A, floatV gx, floatV gy, int base) {
+  intV a = (as_intV(A) + 0x800) >> 12;  // A ≥ 0: rounded to 11 mantissa bits
+  uintV wa = as_uintV(clamp(a - (base << 11), (intV)(0), (intV)(0xffff)));
+  floatV M = fmax(fabs(gx), fabs(gy));
+  intV E = clamp((as_intV(M) >> 23) - 116, (intV)(0), (intV)(15));  // M·2^(15−E) in [16, 32) unless clamped
+  floatV up = as_floatV((142 - E) << 23);                              // 2^(15−E), exact
+  E = GI_SEL(E, E + 1, (M * up >= 31.5f) & (E < 15));                 // rounding would reach 32
+  floatV scale = as_floatV((142 - E) << 23);
+  intV mx = clamp(convert_intV(rint(gx * scale)), (intV)(-31), (intV)(31));
+  intV my = clamp(convert_intV(rint(gy * scale)), (intV)(-31), (intV)(31));
+  return (wa << 16) | as_uintV(E << 12) | as_uintV((mx & 63) << 6) | as_uintV(my & 63);
+}
+
 // GI_SSAO_DOWN = 2 (`ssao.downsample=2`): the occlusion is evaluated on a half-resolution grid,
 // grid pixel (u, v) standing for camera pixel (2u, 2v); the records are then per grid pixel (the
 // plane of the surface seen at that camera pixel, gradients still per camera pixel), and this pass
 // also copies the grid pixels' depth and geometric normal into gridDepth and gridNormal so that the
 // occlusion reads them contiguously, and for the blur's contiguous row loads the plane as three
-// floats: 1/depth A and A·(g_x, g_y), in full precision (the records' gradients are half floats).
+// floats: 1/depth A and A·(g_x, g_y), in full precision (the records are rounded).
 // With GI_SSAO_DOWN = 1 the grid is the camera image and the grid* planes are not written.
 kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView camera, float4 projection,
-                              global const float* depth, global const float4* geoNormal, global uint2* records,
+                              global const float* depth, global const float4* geoNormal, global uint* records,
                               global float* gridDepth, global float4* gridNormal, global float* gridInvDepth,
                               global float* gridSlopeX, global float* gridSlopeY) {
   int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
@@ -149,37 +168,43 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
   nr = copysign(fmax(fabs(nr), 1e-12f), nr);  // a plane seen edge-on: clamped gradients
   floatV inr = 1.0f / nr;
   floatV gx = nx * inr * (1.0f / fx), gy = -ny * inr * (1.0f / fy);
-  uintV g = ssao_half_bits(gx) | (ssao_half_bits(gy) << 16);
   intV surface = isfinite(z);
-  uintV w0 = GI_SEL((uintV)(0u), as_uintV(1.0f / z), surface), w1 = GI_SEL((uintV)(0u), g, surface);
-  global uint* out = (global uint*)(records + i0);
+  floatV A = GI_SEL((floatV)(0.0f), 1.0f / z, surface);
+  uintV w = GI_SEL((uintV)(0u), ssao_encode_record(A, gx, gy, ssao_inv_depth_base(camera.znear)), surface);
 #if GI_SSAO_DOWN != 1
-  floatV A = as_floatV(w0), zero = (floatV)(0.0f);
+  floatV zero = (floatV)(0.0f);
   ssao_store1(gridInvDepth, i0, valid, A);
   ssao_store1(gridSlopeX, i0, valid, GI_SEL(zero, A * gx, surface));
   ssao_store1(gridSlopeY, i0, valid, GI_SEL(zero, A * gy, surface));
 #endif
-#if GI_VW == 1
-  vstore2((uint2)(w0, w1), 0, out);
-#else
-  uint t0[GI_VW], t1[GI_VW];
-  vstoreV(w0, 0, t0);
-  vstoreV(w1, 0, t1);
-  for (int l = 0; l < valid; ++l) vstore2((uint2)(t0[l], t1[l]), l, out);
-#endif
+  if (valid == GI_VW) {
+    vstoreV(w, 0, records + i0);
+  } else {
+    uint t[GI_VW];
+    vstoreV(w, 0, t);
+    for (int l = 0; l < valid; ++l) records[i0 + l] = t[l];
+  }
+}
+
+// t + 1 clamped to [0, n + 1], NaN -> 0, as two selects that compile to one vmaxps and one vminps
+// each (fmin/fmax with their NaN rules took three instructions each).
+inline floatV ssao_clamp_index(floatV t, float n) {
+  floatV u = t + 1.0f;
+  u = GI_SEL((floatV)(0.0f), u, u > 0.0f);
+  return GI_SEL((floatV)(n + 1.0f), u, u < n + 1.0f);
 }
 
 // kernelVectors: GI_SSAO_SAMPLES float4 (tangent-space x, y, z along n_g, already scaled by the
 // length factor lerp(0.1, 1, (i/N)²)); rotations: 16 float2 (cos, sin) for the 4×4 noise tile;
-// records: ssao_depth_planes(). position, normal and direct are read only with bleeding on.
+// records: ssao_depth_planes(). position, normal and direct are read only with GI_SSAO_BLEEDING.
 // The grid (gridWidth × gridHeight) is the camera image or, with GI_SSAO_DOWN = 2, the
 // half-resolution grid of ssao_depth_planes (depth, geoNormal and records per grid pixel; position,
 // normal and direct stay camera images of the given width). Outputs per grid pixel; irradianceOut
-// only with bleeding on (left as it was otherwise).
+// only with GI_SSAO_BLEEDING (left as it was otherwise).
 kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView camera, float4 projection,
-                           global const float* depth, global const float4* geoNormal, global const uint2* records,
+                           global const float* depth, global const float4* geoNormal, global const uint* records,
                            constant float4* kernelVectors, constant float2* rotations, float radius, float bias,
-                           int bleeding, global const float4* position, global const float4* normal,
+                           global const float4* position, global const float4* normal,
                            global const float4* direct, global float* occlusionOut, global float4* irradianceOut) {
   int px0 = get_global_id(0) * GI_VW, y = get_global_id(1);
   if (px0 >= gridWidth || y >= gridHeight) return;
@@ -212,26 +237,27 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
   const float D = (float)GI_SSAO_DOWN;  // camera pixels per grid pixel
   floatV Px = zP * (D * convert_floatV(px0 + GI_LANES) + (0.5f - cx)), Py = zP * (D * (float)y + 0.5f - cy), Pz = zP;
   const float W = (float)gridWidth, H = (float)gridHeight;
-  global const uint* rec = (global const uint*)records;
+  const uint baseBits = (uint)ssao_inv_depth_base(camera.znear) << 23;
+  const float bias2 = bias * bias;
+#if GI_SSAO_BLEEDING
   // Bleeding (eq. 3.5) in world space, from the G-buffer.
-  floatV Pwx = (floatV)(0.0f), Pwy = Pwx, Pwz = Pwx, nx = Pwx, ny = Pwx, nz = Pwx;
-  if (bleeding) {
+  floatV Pwx, Pwy, Pwz, nx, ny, nz;
 #if GI_SSAO_DOWN == 1
-    SSAO_LOAD4(position, i0, valid, Pwx, Pwy, Pwz, unused)
-    SSAO_LOAD4(normal, i0, valid, nx, ny, nz, unused)
+  SSAO_LOAD4(position, i0, valid, Pwx, Pwy, Pwz, unused)
+  SSAO_LOAD4(normal, i0, valid, nx, ny, nz, unused)
 #else
-    intV own = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, gridWidth - 1);
-    GI_GATHER_AOS4(float, (global const float*)position, own, Pwx, Pwy, Pwz, unused)
-    GI_GATHER_AOS4(float, (global const float*)normal, own, nx, ny, nz, unused)
+  intV own = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, gridWidth - 1);
+  GI_GATHER_AOS4(float, (global const float*)position, own, Pwx, Pwy, Pwz, unused)
+  GI_GATHER_AOS4(float, (global const float*)normal, own, nx, ny, nz, unused)
 #endif
-  }
   const float As = GI_PI * radius * radius / (float)GI_SSAO_SAMPLES;
   const float d2min = radius * radius / (float)GI_SSAO_SAMPLES;  // A_s/π
   global const float* pos = (global const float*)position;
   global const float* nrm = (global const float*)normal;
   global const float* dir = (global const float*)direct;
-  intV occluded = (intV)(0);  // samples occluded
   floatV Ex = (floatV)(0.0f), Ey = (floatV)(0.0f), Ez = (floatV)(0.0f);
+#endif
+  intV occluded = (intV)(0);  // samples occluded
 #pragma unroll
   for (int i = 0; i < GI_SSAO_SAMPLES; ++i) {
     float4 k = kernelVectors[i];
@@ -249,28 +275,31 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
 #else
     floatV tx = sx * (1.0f / D) + (0.5f - 0.5f / D), ty = sy * (1.0f / D) + (0.5f - 0.5f / D);
 #endif
-    intV ix = convert_intV(fmin(fmax(tx + 1.0f, 0.0f), W + 1.0f)) - 1;
-    intV iy = convert_intV(fmin(fmax(ty + 1.0f, 0.0f), H + 1.0f)) - 1;
+    intV ix = convert_intV(ssao_clamp_index(tx, W)) - 1, iy = convert_intV(ssao_clamp_index(ty, H)) - 1;
     intV ok = (Sz > 0.0f) & (as_uintV(ix) < (uint)gridWidth) & (as_uintV(iy) < (uint)gridHeight);
     intV q = GI_SEL((intV)(0), iy * gridWidth + ix, ok);
-    intV q2 = q * 2;  // word index of the record
-    uintV w0 = GI_GATHER(uintV, rec, q2), w1 = GI_GATHER(uintV, rec, q2 + 1);
-    // q's record describes the plane at camera pixel (D·ix, D·iy).
-    floatV qx = D * convert_floatV(ix), qy = D * convert_floatV(iy);
-    floatV A = as_floatV(w0), gqx = ssao_half_value(w1 << 16), gqy = ssao_half_value(w1);
-    floatV ux = qx + (0.5f - cx), uy = qy + (0.5f - cy);  // q's centre relative to the principal point
-    floatV invPlane = A * (1.0f + gqx * (sx - qx - 0.5f) + gqy * (sy - qy - 0.5f));
-    // The view ray through S meets q's plane at depth 1/invPlane; S lies e = depth_S·invPlane − 1
-    // (relative) behind it, which is a distance e·depth_q·|n·r(q)| = e/(A·|m|) along the plane's
-    // normal, m = (g_x·fx, −g_y·fy, 1 − g·u) being that normal over n·r(q). Occluded: more than
-    // the bias behind, e > bias·A·|m| (squared: no square root), and the range check
-    // |depth_q − depth_P| < R multiplied by A > 0 (the background, A = 0, fails both).
-    floatV mx = gqx * fx, my = gqy * fy, mz = 1.0f - gqx * ux - gqy * uy;
-    floatV e = Sz * invPlane - 1.0f, bA = bias * A;
-    intV occ = ok & (e > 0.0f) & (e * e > bA * bA * (mx * mx + my * my + mz * mz)) &
+    uintV w = GI_GATHER(uintV, records, q);
+    // q's record describes the plane at camera pixel (D·ix, D·iy); decoded as ssao_encode_record:
+    // A, and A·g = m·A·2^(E−15) (the exponent fields added: exact).
+    uintV aField = (w >> 4) & 0x0ffff000u;
+    floatV A = as_floatV(aField + baseBits);
+    floatV Ag = as_floatV(aField + ((w << 11) & 0x07800000u) + (baseBits - (15u << 23)));
+    floatV Agx = convert_floatV(as_intV(w << 20) >> 26) * Ag, Agy = convert_floatV(as_intV(w << 26) >> 26) * Ag;
+    floatV ux = D * convert_floatV(ix) + (0.5f - cx), uy = D * convert_floatV(iy) + (0.5f - cy);  // q's centre
+    // The plane 1/depth(s) = A·(1 + g·(s − q's centre)) is n'·S = 1 in these coordinates, with
+    // n' = (A·g_x, A·g_y, A·(1 − g·u)), u = q's centre relative to the principal point; S lies
+    // e = n'·S − 1 = depth_S·(1/depth of the plane on S's ray) − 1 (relative) behind it, which is a
+    // distance e/|n'_m| along the plane's normal, n'_m = (A·g_x·fx, A·g_y·fy, n'_z) being n' in
+    // metric camera coordinates. Occluded: more than the bias behind, e > bias·|n'_m| (squared: no
+    // square root), and the range check |depth_q − depth_P| < R multiplied by A > 0.
+    floatV Anz = A - Agx * ux - Agy * uy;  // n'_z (nz is P's shading normal)
+    floatV e = Agx * Sx + Agy * Sy + Anz * Sz - 1.0f;
+    floatV mx = Agx * fx, my = Agy * fy;
+    intV occ = ok & (e > 0.0f) & (e * e > bias2 * (mx * mx + my * my + Anz * Anz)) &
                (fabs(1.0f - zP * A) < radius * A);
     SSAO_COUNT(occluded, occ);
-    if (bleeding && GI_ANY(occ)) {
+#if GI_SSAO_BLEEDING
+    if (GI_ANY(occ)) {
 #if GI_SSAO_DOWN == 1
       intV q4 = q * 4;
 #else
@@ -288,19 +317,20 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
       Ey += GI_GATHER(floatV, dir, q4 + 1) * f;
       Ez += GI_GATHER(floatV, dir, q4 + 2) * f;
     }
+#endif
   }
   // Background lanes ran with depth 0 (their samples may pass the tests): no occlusion, no light.
   ssao_store1(occlusionOut, i0, valid,
               GI_SEL((floatV)(0.0f), convert_floatV(occluded) / (float)GI_SSAO_SAMPLES, surface));
   // E only with bleeding on: the blur reads it only then, and 16 bytes per pixel written for
   // nothing would also push the sampled records out of the L2 cache.
-  if (bleeding) {
-    floatV zero = (floatV)(0.0f);
-    Ex = GI_SEL(zero, Ex, surface);
-    Ey = GI_SEL(zero, Ey, surface);
-    Ez = GI_SEL(zero, Ez, surface);
-    SSAO_STORE4(irradianceOut, i0, valid, Ex, Ey, Ez, zero)
-  }
+#if GI_SSAO_BLEEDING
+  floatV zero = (floatV)(0.0f);
+  Ex = GI_SEL(zero, Ex, surface);
+  Ey = GI_SEL(zero, Ey, surface);
+  Ez = GI_SEL(zero, Ez, surface);
+  SSAO_STORE4(irradianceOut, i0, valid, Ex, Ey, Ez, zero)
+#endif
 }
 
 // The composition of GI_VW pixels from pixel i0 (valid of them in the image): stores the blurred

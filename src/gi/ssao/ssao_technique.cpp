@@ -88,7 +88,7 @@ SsaoSettings ssaoSettings(const ParamSet& p, const Bounds& bounds, bool upstream
 void SsaoTechnique::setup(const FrameResources& f) {
   size_t n = size_t(f.gbuffer.width) * f.gbuffer.height;
   rawOcclusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao raw occlusion");
-  records_ = cl::Buffer(f.ctx, n * 8, CL_MEM_READ_WRITE, "ssao depth-plane records");
+  records_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao depth-plane records");
   rawIrradiance_ = cl::Buffer(f.ctx, n * 16, CL_MEM_READ_WRITE, "ssao raw bleeding irradiance");
   occlusion_ = cl::Buffer(f.ctx, n * 4, CL_MEM_READ_WRITE, "ssao occlusion");
   rotations_ = f.ctx.upload(ssaoRotations(), "ssao rotations");
@@ -97,9 +97,10 @@ void SsaoTechnique::setup(const FrameResources& f) {
 void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s) {
   if (s.downsample != 1 && s.downsample != 2)
     throw Error("ssao.downsample = " + std::to_string(s.downsample) + ": expected 1 or 2");
-  if (s.samples != programSamples_ || s.downsample != programDownsample_) {
+  if (s.samples != programSamples_ || s.downsample != programDownsample_ || int(s.bleeding) != programBleeding_) {
     program_ = f.ctx.buildProgram("kernels/gi/ssao/ssao.cl", {{"GI_SSAO_SAMPLES", std::to_string(s.samples)},
-                                                              {"GI_SSAO_DOWN", std::to_string(s.downsample)}});
+                                                              {"GI_SSAO_DOWN", std::to_string(s.downsample)},
+                                                              {"GI_SSAO_BLEEDING", s.bleeding ? "1" : "0"}});
     occlusionKernel_ = program_.kernel("ssao_occlusion");
     if (s.downsample == 1) {
       blurKernel_ = program_.kernel("ssao_blur_compose");
@@ -115,6 +116,7 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
     kernelVectors_ = f.ctx.upload(ssaoKernelVectors(s.samples), "ssao kernel vectors");
     programSamples_ = s.samples;
     programDownsample_ = s.downsample;
+    programBleeding_ = int(s.bleeding);
   }
   const GBuffer& g = f.gbuffer;
   std::array<float, 4> p = ssaoProjection(g.view);
@@ -138,7 +140,7 @@ void SsaoTechnique::occlusionPass(const FrameResources& f, const SsaoSettings& s
                      invDepth, slopeX, slopeY);
   f.ctx.launch(planesKernel_, pixelGroups(f.ctx.vectorWidth(), gw, gh), "ssao: depth planes");
   occlusionKernel_.args(gw, gh, g.width, g.view, projection, depth, normal, records_, kernelVectors_, rotations_,
-                        s.radius, s.bias, int(s.bleeding), g.position, g.normal, f.direct, rawOcclusion_,
+                        s.radius, s.bias, g.position, g.normal, f.direct, rawOcclusion_,
                         rawIrradiance_);
   f.ctx.launch(occlusionKernel_, pixelGroups(f.ctx.vectorWidth(), gw, gh), "ssao: occlusion");
 }

@@ -58,6 +58,9 @@ public:
   cl::Buffer& rawOcclusion() { return rawOcclusion_; }
   cl::Buffer& rawIrradiance() { return rawIrradiance_; }
   const cl::Buffer& occlusion() const { return occlusion_; }
+  // uint per grid pixel: the 4-byte depth-plane records the occlusion pass samples
+  // (kernels/gi/ssao/ssao.cl, ssao_encode_record).
+  const cl::Buffer& depthPlaneRecords() const { return records_; }
 
 private:
   cl::Program program_, blurProgram_;
@@ -65,7 +68,7 @@ private:
   cl::Buffer kernelVectors_, rotations_, rawOcclusion_, rawIrradiance_, occlusion_, records_;
   // downsample = 2: the grid pixels' depth, geometric normal, and planes (1/depth and its slopes).
   cl::Buffer gridDepth_, gridNormal_, gridInvDepth_, gridSlopeX_, gridSlopeY_;
-  int programSamples_ = 0, programDownsample_ = 0;
+  int programSamples_ = 0, programDownsample_ = 0, programBleeding_ = -1;
 };
 
 }  // namespace gi
