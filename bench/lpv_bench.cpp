@@ -7,6 +7,7 @@
 //
 //   build/lpv_bench [--scene scenes/sponza.json] [--width 640 --height 360] [--frames 9] [--large]
 //                   [--falloff] [--propagation] [--config I] [--passes all|propagate|lookup]
+//                   [--set lpv.bounces=true ...]
 //   (--large adds 64³ cascades and a 128³ grid with 128 iterations; --falloff only prints how
 //   far light travels: the on-axis irradiance above one cosine-lobe cell in an empty grid after
 //   `resolution` iterations, against the exact Φ/(π r²) of that emitter, at 32³, 64³ and 128³;
@@ -14,7 +15,9 @@
 //   blockers: device ms and process CPU ms per step, median and least of --frames runs of
 //   `resolution` steps;
 //   --config I times only the I-th configuration of the list below, 0-based; --passes times the
-//   propagation and/or the lookup alone, repeated on one rendered frame: timePasses)
+//   propagation and/or the lookup alone, repeated on one rendered frame: timePasses; --set adds a
+//   parameter to every configuration of the list, e.g. the extensions lpv.bounces, lpv.damping,
+//   whose passes show as "lpv: bounces" and inside "lpv: lookup")
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -101,12 +104,15 @@ void timePropagation(cl::Context& ctx, int n, int runs) {
 // least of each (under load the least disturbed repetition). One 32³
 // grid over the scene and 3 cascades of 32³ (finest edge = a quarter of the bounds' longest edge,
 // centred on the camera). Less noisy than whole frames: nothing else runs between the launches.
-void timePasses(cl::Context& ctx, const Scene& scene, const timing::FrameSettings& a, const std::string& which) {
+// `bounces`, `damping`: the extensions lpv.bounces (its face albedo and reflection passes inside
+// "propagate") and lpv.damping (inside "lookup").
+void timePasses(cl::Context& ctx, const Scene& scene, const timing::FrameSettings& a, const std::string& which,
+                bool bounces, bool damping) {
   RenderSettings rs;
   rs.width = a.width;
   rs.height = a.height;
   rs.technique = "lpv";
-  rs.sets = {"lpv.cascades=0", "rsm.resolution=512", "lpv.rsm_size=256"};
+  rs.sets = {"lpv.cascades=0", "rsm.resolution=512", "lpv.rsm_size=256"};  // the frame's G-buffer and RSM only
   Renderer r(ctx, scene, rs);
   r.renderFrame();
   const GBuffer& g = r.gbuffer();
@@ -115,7 +121,7 @@ void timePasses(cl::Context& ctx, const Scene& scene, const timing::FrameSetting
   cl::Buffer out(ctx, size_t(g.width) * g.height * 16, CL_MEM_READ_WRITE, "lpv bench output");
   for (int cascades : {0, 3}) {
     const int n = 32;
-    LpvVolume v(ctx, n, std::max(cascades, 1));
+    LpvVolume v(ctx, n, std::max(cascades, 1), LpvLookupStorage::Buffer, bounces);
     auto layout = lpvCascadeLayout(scene.bounds, camera, n, cascades, std::max({e.x, e.y, e.z}) / 4.0f);
     auto runPass = [&](const char* what, auto&& pass) {
       std::vector<double> device, cpu;
@@ -147,7 +153,7 @@ void timePasses(cl::Context& ctx, const Scene& scene, const timing::FrameSetting
     };
     runPass("inject + geometry + resolve", fill);
     if (which != "lookup") runPass("propagate, 32 steps with blocking", [&] { v.propagate(n, true); });
-    if (which != "propagate") runPass("lookup (lookup grid + per pixel)", [&] { v.lookup(g, cascades > 0, out); });
+    if (which != "propagate") runPass("lookup (lookup grid + per pixel)", [&] { v.lookup(g, cascades > 0, out, damping); });
   }
 }
 
@@ -159,6 +165,7 @@ int main(int argc, char** argv) {
   bool large = false, falloff = false, propagation = false;
   std::string passes;  // --passes all | propagate | lookup
   int onlyConfig = -1;
+  std::vector<std::string> extraSets;
   for (int i = 1; i < argc; ++i) {
     std::string k = argv[i];
     auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
@@ -171,8 +178,9 @@ int main(int argc, char** argv) {
     else if (k == "--propagation") propagation = true;
     else if (k == "--passes") passes = next();
     else if (k == "--config") onlyConfig = std::stoi(next());
+    else if (k == "--set") extraSets.push_back(next());
     else {
-      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large] [--falloff] [--propagation] [--config I] [--passes all|propagate|lookup]\n");
+      std::fprintf(stderr, "usage: lpv_bench [--scene S] [--width W --height H] [--frames N] [--large] [--falloff] [--propagation] [--config I] [--passes all|propagate|lookup] [--set K=V]...\n");
       return 2;
     }
   }
@@ -198,7 +206,10 @@ int main(int argc, char** argv) {
     if (!passes.empty()) {
       std::printf("lpv passes alone: %s, %dx%d, %s, median of %d runs\n", scene.name.c_str(), a.width, a.height,
                   ctx.device().name.c_str(), a.frames);
-      timePasses(ctx, scene, a, passes);
+      auto has = [&](const std::string& set) {
+        return std::find(extraSets.begin(), extraSets.end(), set) != extraSets.end();
+      };
+      timePasses(ctx, scene, a, passes, has("lpv.bounces=true"), has("lpv.damping=true"));
       return 0;
     }
     std::printf("lpv bench: %s, %dx%d, %s, median of %d frames after %d warm-up\n", scene.name.c_str(), a.width,
@@ -223,6 +234,7 @@ int main(int argc, char** argv) {
       std::vector<std::string> sets = {"lpv.resolution=" + std::to_string(c.resolution),
                                        "lpv.cascades=" + std::to_string(c.cascades),
                                        "rsm.resolution=" + std::to_string(c.rsm), "lpv.rsm_size=256"};
+      sets.insert(sets.end(), extraSets.begin(), extraSets.end());
       auto t = timing::timeTechnique(ctx, scene, a, "lpv", sets, c.title);
       int iterations = c.resolution;
       double perStep = t["lpv: propagate"] / iterations / std::max(c.cascades, 1);

@@ -187,4 +187,52 @@ TEST(LpvAccuracyDiagnosis, DISABLED_SponzaVariants) {
             {"lpv.cascades=0", "lpv.resolution=128", "lpv.iterations=256"}});
 }
 
+// The published extensions (docs/techniques/lpv.md, "Extensions") against the stored converged
+// references of lpv_accuracy_test.cpp (tests/data/references; no path tracing here), each
+// extension set appended to the accuracy tests' configurations: full Cornell box at 32³ × 32 and
+// 16³ × 64 (SSIM of direct + LPV; LPV indirect over the one-bounce reference per image quarter),
+// Sponza 96×54 with 3 cascades (SSIM), empty Cornell box (one-bounce indirect mean, bound ±25 %).
+//
+//   GI_MEDIA_DIR=../shared/scenes build/tests/gi_tests --gtest_also_run_disabled_tests \
+//     --gtest_filter='LpvAccuracyDiagnosis.DISABLED_Extensions'
+TEST(LpvAccuracyDiagnosis, DISABLED_Extensions) {
+  const std::vector<std::vector<std::string>> extensions = {{}, {"lpv.bounces=true"}, {"lpv.damping=true"},
+                                                            {"lpv.bounces=true", "lpv.damping=true"}};
+  Scene box = test::cornellWithSpot(true), empty = test::cornellWithSpot(false);
+  std::string why;
+  std::optional<Scene> sponza = test::loadSponza(why);
+  auto with = [](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  for (const std::vector<std::string>& e : extensions) {
+    std::string label = "(none)";
+    if (!e.empty()) label.clear();
+    for (const std::string& x : e) label += x + " ";
+    for (const std::vector<std::string>& grid : std::vector<std::vector<std::string>>{
+             {"lpv.cascades=0", "lpv.resolution=32"}, {"lpv.cascades=0", "lpv.resolution=16", "lpv.iterations=64"}}) {
+      test::AccuracyPair full = test::renderAgainstReference(box, "lpv", 128, 128, with(grid, e), false,
+                                                             ReferenceMode::Full, false, "cornell_spot_full_128", 256);
+      test::AccuracyPair ind = test::renderAgainstReference(box, "lpv", 128, 128, with(grid, e), true,
+                                                            ReferenceMode::OneBounce, true,
+                                                            "cornell_spot_one_bounce_diffuse_128", 256);
+      std::printf("[extensions] %s| Cornell %s: SSIM %.4f; I/R1b %.3f (quarters%s)\n", label.c_str(), grid[1].c_str(),
+                  ssimOf(full.reference, full.raster, box.exposure), test::meanOf(ind.raster) / test::meanOf(ind.reference),
+                  quarterRatios(ind.raster, ind.reference).c_str());
+    }
+    if (sponza) {
+      test::AccuracyPair p = test::renderAgainstReference(*sponza, "lpv", 96, 54, with({"rsm.resolution=256"}, e), false,
+                                                          ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
+      std::printf("[extensions] %s| Sponza: SSIM %.4f, mean %.5f vs %.5f\n", label.c_str(),
+                  ssimOf(p.reference, p.raster, sponza->exposure), test::meanOf(p.raster), test::meanOf(p.reference));
+    }
+    test::AccuracyPair p = test::renderAgainstReference(empty, "lpv", 128, 128,
+                                                        with({"lpv.cascades=0", "lpv.resolution=32"}, e), true,
+                                                        ReferenceMode::OneBounce, true,
+                                                        "cornell_empty_spot_one_bounce_diffuse_128", 256);
+    std::printf("[extensions] %s| empty Cornell one-bounce mean %+.1f %%\n", label.c_str(),
+                100.0 * (test::meanOf(p.raster) / test::meanOf(p.reference) - 1.0));
+  }
+}
+
 }  // namespace

@@ -69,43 +69,89 @@ inline float roundToHalf(float f) {
   return std::nearbyint(f / spacing) * spacing;
 }
 
+// The 4 corner nodes of the face between cell c and c + d (d an axis direction), lower one first.
+inline std::array<glm::ivec3, 4> faceCorners(glm::ivec3 c, glm::vec3 d) {
+  int a = d.x != 0 ? 0 : d.y != 0 ? 1 : 2;
+  glm::ivec3 corner = c;
+  if (d[a] > 0) corner[a] += 1;
+  glm::ivec3 eu(0), ev(0);  // the face's in-plane axes, lower one first
+  eu[a == 0 ? 1 : 0] = 1;
+  ev[a == 2 ? 1 : 2] = 1;
+  return {corner, corner + eu, corner + ev, corner + eu + ev};
+}
+
+// Blocking potential of the face between cell c and c + d: average of its 4 corner nodes, summed
+// in the kernel's order and stored in half precision as lpv_face_geometry does.
+inline glm::vec4 sharedFace(int n, int k, const std::vector<glm::vec4>& geometry, glm::ivec3 c, glm::vec3 d) {
+  std::array<glm::ivec3, 4> q = faceCorners(c, d);
+  glm::vec4 sum = geometry[nodeIndex(n, k, q[0])] + geometry[nodeIndex(n, k, q[1])];
+  sum = sum + geometry[nodeIndex(n, k, q[2])];
+  sum = sum + geometry[nodeIndex(n, k, q[3])];
+  glm::vec4 g;
+  for (int i = 0; i < 4; ++i) g[i] = roundToHalf(std::clamp(0.25f * sum[i], -65504.0f, 65504.0f));
+  return g;
+}
+
+// T_f = ΔΩ_f/π · (1 − clamp(GV · Y(−ω_f), 0, 1)), stored by the device in half precision
+// (lpv_face_factors).
+inline float transmittance(const Face& f, glm::vec4 g) {
+  return roundToHalf(f.solidAngle / kPi * (1.0f - std::clamp(glm::dot(g, basis(-f.eval)), 0.0f, 1.0f)));
+}
+
+// f(k, c, d) for every cascade k, cell c and axis direction d of `g`.
+template <class F>
+void forEachCellAndAxis(const Grid& g, F&& f) {
+  for (int k = 0; k < g.cascades; ++k)
+    for (int z = 0; z < g.n; ++z)
+      for (int y = 0; y < g.n; ++y)
+        for (int x = 0; x < g.n; ++x)
+          for (glm::vec3 d : axes()) f(k, glm::ivec3(x, y, z), d);
+}
+
 // One gather step from `src`; `geometry` (per node, may be empty) blocks when `blocking`.
 inline Grid propagate(const Grid& src, const std::vector<glm::vec4>& geometry, bool blocking) {
   Grid dst(src.n, src.cascades);
-  for (int k = 0; k < src.cascades; ++k)
-    for (int z = 0; z < src.n; ++z)
-      for (int y = 0; y < src.n; ++y)
-        for (int x = 0; x < src.n; ++x) {
-          glm::ivec3 c(x, y, z);
-          for (glm::vec3 d : axes()) {
-            glm::ivec3 nb = c - glm::ivec3(d);
-            if (!src.inside(nb)) continue;
-            glm::vec4 g(0.0f);
-            if (blocking) {
-              // Shared face between nb and c: average of its 4 corner nodes, summed in the
-              // kernel's order and stored in half precision as lpv_face_geometry does.
-              int a = d.x != 0 ? 0 : d.y != 0 ? 1 : 2;
-              glm::ivec3 corner = c;
-              if (d[a] < 0) corner[a] += 1;
-              glm::ivec3 eu(0), ev(0);  // the face's in-plane axes, lower one first
-              eu[a == 0 ? 1 : 0] = 1;
-              ev[a == 2 ? 1 : 2] = 1;
-              glm::vec4 sum = geometry[nodeIndex(src.n, k, corner)] + geometry[nodeIndex(src.n, k, corner + eu)];
-              sum = sum + geometry[nodeIndex(src.n, k, corner + ev)];
-              sum = sum + geometry[nodeIndex(src.n, k, corner + eu + ev)];
-              for (int q = 0; q < 4; ++q) g[q] = roundToHalf(std::clamp(0.25f * sum[q], -65504.0f, 65504.0f));
-            }
-            for (const Face& f : facesFor(d)) {
-              float w = f.solidAngle / kPi;
-              // The device stores each face factor in half precision (lpv_face_factors).
-              if (blocking) w = roundToHalf(w * (1.0f - std::clamp(glm::dot(g, basis(-f.eval)), 0.0f, 1.0f)));
-              for (int ch = 0; ch < 3; ++ch) {
-                float intensity = std::max(glm::dot(src.c[src.index(k, ch, nb)], basis(f.eval)), 0.0f);
-                dst.c[dst.index(k, ch, c)] += intensity * w * lobe(f.emit);
-              }
-            }
-          }
-        }
+  forEachCellAndAxis(src, [&](int k, glm::ivec3 c, glm::vec3 d) {
+    glm::ivec3 nb = c - glm::ivec3(d);
+    if (!src.inside(nb)) return;
+    glm::vec4 g = blocking ? sharedFace(src.n, k, geometry, nb, d) : glm::vec4(0.0f);
+    for (const Face& f : facesFor(d)) {
+      float w = blocking ? transmittance(f, g) : f.solidAngle / kPi;
+      for (int ch = 0; ch < 3; ++ch) {
+        float intensity = std::max(glm::dot(src.c[src.index(k, ch, nb)], basis(f.eval)), 0.0f);
+        dst.c[dst.index(k, ch, c)] += intensity * w * lobe(f.emit);
+      }
+    }
+  });
+  return dst;
+}
+
+// Multiple bounces (lpv.bounces, lpv.cl lpv_reflect_blocked): the light of each cell of `src` that
+// the faces to its neighbours block in a blocked step, Φ_b/π = Σ_f (ΔΩ_f/π − T_f) · max(0, I(ω_f)),
+// reflected back into the cell by the blocker as ρ · Φ_b/π · lobe(n): ρ the area-weighted albedo
+// of the face's 4 corner nodes (`albedo`: Σ ρ·w, Σ w per node), n the face potential's linear part
+// normalized and turned towards the cell (−d where it is zero).
+inline Grid reflectBlocked(const Grid& src, const std::vector<glm::vec4>& geometry, const std::vector<glm::vec4>& albedo) {
+  Grid dst(src.n, src.cascades);
+  forEachCellAndAxis(src, [&](int k, glm::ivec3 c, glm::vec3 d) {
+    if (!src.inside(c + glm::ivec3(d))) return;  // the light leaves the grid
+    glm::vec4 g = sharedFace(src.n, k, geometry, c, d);
+    glm::vec4 sums(0.0);
+    for (glm::ivec3 q : faceCorners(c, d)) sums += albedo[nodeIndex(src.n, k, q)];
+    glm::vec3 rho = sums.w > 0.0f ? glm::vec3(sums) / sums.w : glm::vec3(0.0f);
+    glm::vec3 normal(g.w, g.y, g.z);  // the linear coefficients in (y, z, x) order
+    normal = glm::dot(normal, normal) > 1e-30f ? glm::normalize(normal) : -d;
+    if (glm::dot(normal, d) > 0.0f) normal = -normal;
+    for (int ch = 0; ch < 3; ++ch) {
+      float blocked = 0.0f;
+      for (const Face& f : facesFor(d)) {
+        float open = f.solidAngle / kPi;
+        blocked += std::max(open - transmittance(f, g), 0.0f) *
+                   std::max(glm::dot(src.c[src.index(k, ch, c)], basis(f.eval)), 0.0f);
+      }
+      dst.c[dst.index(k, ch, c)] += rho[ch] * blocked * lobe(normal);
+    }
+  });
   return dst;
 }
 

@@ -236,30 +236,42 @@ lpvref::Grid randomGrid(uint32_t seed, int n = kN) {
 
 // 3 steps with blocking on an n³ grid of 2 cascades against the host mirror. n = 8: 8 cells of a
 // row per work-item; n = 16: 16 where the device's native width is 16 (AVX-512: the propagation
-// then loads the face factors through lpv.cl's lpv_load_factor conversion).
-void propagationMatchesHost(int n) {
+// then loads the face factors through lpv.cl's lpv_load_factor conversion). With `bounces` the
+// blocked light is reflected after each blocked step (LpvBounces below).
+void propagationMatchesHost(int n, bool bounces = false) {
   cl::Context& ctx = test::context();
   lpvref::Grid g = randomGrid(3, n);
   std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(0.0f, 0.4f);
-  std::vector<glm::vec4> geometry(2 * size_t(n + 1) * (n + 1) * (n + 1));
+  std::uniform_real_distribution<float> u(0.0f, 0.4f), unit(0.0f, 1.0f);
+  size_t nodes = 2 * size_t(n + 1) * (n + 1) * (n + 1);
+  std::vector<glm::vec4> geometry(nodes), albedo(nodes);
   for (glm::vec4& c : geometry) c = lpvref::lobe(randomUnit(rng)) * u(rng);
-  LpvVolume v(ctx, n, 2);
+  for (size_t i = 0; i < nodes; ++i) {
+    float w = i % 5 == 2 ? 0.0f : unit(rng);  // Σ w per node (A/s²)
+    albedo[i] = glm::vec4(unit(rng) * w, unit(rng) * w, unit(rng) * w, w);
+  }
+  LpvVolume v(ctx, n, 2, LpvLookupStorage::Buffer, bounces);
   v.begin({{glm::vec3(0.0f), 1.0f / n}, {glm::vec3(-0.5f), 2.0f / n}}, 1.0f);
   v.resolve(false);
   v.setGeometry(geometry);
+  if (bounces) v.setSurfelAlbedo(albedo);
   v.setInjected(g.c);
   const int steps = 3;
   v.propagate(steps, true);
   lpvref::Grid cur = g, acc = g;
   for (int i = 0; i < steps; ++i) {
-    cur = lpvref::propagate(cur, geometry, i > 0);
+    lpvref::Grid next = lpvref::propagate(cur, geometry, i > 0);
+    if (bounces && i > 0) {
+      lpvref::Grid reflected = lpvref::reflectBlocked(cur, geometry, albedo);
+      for (size_t j = 0; j < next.c.size(); ++j) next.c[j] += reflected.c[j];
+    }
+    cur = next;
     for (size_t j = 0; j < acc.c.size(); ++j) acc.c[j] += cur.c[j];
   }
   double errStep = relativeMaxError(v.readCurrent(), cur.c);
   double errAcc = relativeMaxError(v.readAccumulated(), acc.c);
-  std::printf("propagation, %d^3, 3 steps with blocking: max error %.2e (last step), %.2e (accumulated)\n", n,
-              errStep, errAcc);
+  std::printf("propagation, %d^3, 3 steps with blocking%s: max error %.2e (last step), %.2e (accumulated)\n", n,
+              bounces ? " and reflection" : "", errStep, errAcc);
   // Both sides round each face factor T_f to half precision (lpv_face_factors, lpvref::propagate),
   // from float values that differ in their last bits (fused multiply-adds on the device): where
   // the two lie on either side of a half rounding boundary (about 2e-4 of the factors: a float
@@ -279,7 +291,9 @@ TEST(LpvKernels, PropagationMatchesHost16) { propagationMatchesHost(16); }
 // weights, up to 1/512 of the cell-to-cell difference: 4e-3 there). With `steps` > 0 the grid is
 // propagated first, so that the last step writes the lookup grid (lpv.cl LPV_WRITE_LOOKUP) instead
 // of lpv_lookup_grid; the host then starts from the device's accumulated grid.
-void lookupMatchesHost(LpvLookupStorage storage, int steps = 0) {
+// With `damping` (lpv.damping) the irradiance is also looked up one cell further along the
+// geometric normal and E limited to it (lpv.cl lpv_lookup).
+void lookupMatchesHost(LpvLookupStorage storage, int steps = 0, bool damping = false) {
   cl::Context& ctx = test::context();
   if (storage == LpvLookupStorage::Image) ASSERT_TRUE(ctx.device().imageSupport) << "the test device has no images";
   const int w = 27, h = 16;  // rows end inside a work-item's lanes: their last lanes must not be stored
@@ -309,9 +323,9 @@ void lookupMatchesHost(LpvLookupStorage storage, int steps = 0) {
   }
   cl::Buffer out(ctx, size_t(w) * h * 16, CL_MEM_READ_WRITE, "out");
 
-  auto irradiance = [&](int k, glm::vec3 q, glm::vec3 ng, glm::vec3 n) {
+  auto irradianceAt = [&](int k, glm::vec3 q, glm::vec3 ng, glm::vec3 n, float offset) {
     float s = kTwoCascades[k].cell;
-    glm::vec3 u = glm::clamp((q + 0.5f * s * ng - kTwoCascades[k].origin) / s - 0.5f, 0.0f, float(kN - 1));
+    glm::vec3 u = glm::clamp((q + offset * s * ng - kTwoCascades[k].origin) / s - 0.5f, 0.0f, float(kN - 1));
     glm::ivec3 c0 = glm::min(glm::ivec3(glm::floor(u)), glm::ivec3(kN - 2));
     glm::vec3 f = u - glm::vec3(c0);
     glm::vec3 e(0.0f);
@@ -330,39 +344,53 @@ void lookupMatchesHost(LpvLookupStorage storage, int steps = 0) {
     glm::vec3 t = glm::clamp((glm::abs(q - centre) - (0.5f * extent - wd)) / wd, 0.0f, 1.0f);
     return std::max(t.x, std::max(t.y, t.z));
   };
+  int damped = 0;
+  auto irradiance = [&](int k, glm::vec3 q, glm::vec3 ng, glm::vec3 n) { return irradianceAt(k, q, ng, n, 0.5f); };
+  auto outer = [&](int k, glm::vec3 q, glm::vec3 ng, glm::vec3 n) { return irradianceAt(k, q, ng, n, 1.5f); };
   for (bool blendCascades : {false, true}) {
-    v.lookup(gb, blendCascades, out);
+    v.lookup(gb, blendCascades, out, damping);
     std::vector<glm::vec4> got = ctx.download<glm::vec4>(out), want(size_t(w) * h, glm::vec4(0.0f));
     int blended = 0;
     for (int i = 0; i < w * h; ++i) {
       if (!(p.position[i].w > 0.0f)) continue;
       glm::vec3 q(p.position[i]), ng(p.normal[i]), n(shading[i]);
-      glm::vec3 e;
+      glm::vec3 e, eOuter;
       if (!blendCascades) {
         e = irradiance(0, q, ng, n);
+        eOuter = outer(0, q, ng, n);
       } else {
         float t = blend(0, q);
         int k = t >= 1.0f ? 1 : 0;
         if (k == 1) t = blend(1, q);
         e = irradiance(k, q, ng, n);
+        eOuter = outer(k, q, ng, n);
         if (k == 0 && t > 0.0f) {
           e = glm::mix(e, irradiance(1, q, ng, n), t);
+          eOuter = glm::mix(eOuter, outer(1, q, ng, n), t);
           ++blended;
         }
+      }
+      if (damping) {
+        glm::vec3 limited = glm::min(e, glm::max(eOuter, 0.0f));
+        if (limited != e && glm::any(glm::greaterThan(e, glm::vec3(0.0f)))) ++damped;
+        e = limited;
       }
       want[i] = glm::vec4(glm::max(glm::vec3(albedo[i]) / lpvref::kPi * e, 0.0f), 0.0f);
     }
     if (blendCascades) EXPECT_GT(blended, 5);
     double err = relativeMaxError(got, want);
-    std::printf("lookup from a %s (blend %d): max error %.2e\n",
-                storage == LpvLookupStorage::Image ? "3D image" : "buffer", int(blendCascades), err);
+    std::printf("lookup from a %s (blend %d%s): max error %.2e\n",
+                storage == LpvLookupStorage::Image ? "3D image" : "buffer", int(blendCascades),
+                damping ? ", damping" : "", err);
     EXPECT_LT(err, storage == LpvLookupStorage::Image && ctx.device().isGpu ? 4e-3 : 1e-5);
   }
+  if (damping) EXPECT_GT(damped, 20);  // the damping is exercised
 }
 
 TEST(LpvKernels, LookupMatchesHost) { lookupMatchesHost(LpvLookupStorage::Buffer); }
 TEST(LpvKernels, LookupFrom3dImageMatchesHost) { lookupMatchesHost(LpvLookupStorage::Image); }
 TEST(LpvKernels, LookupAfterPropagationMatchesHost) { lookupMatchesHost(LpvLookupStorage::Buffer, 3); }
+TEST(LpvKernels, LookupWithDampingMatchesHost) { lookupMatchesHost(LpvLookupStorage::Buffer, 3, true); }
 
 // One cell at the centre of an empty 16³ grid, propagated without blocking. Step 1 keeps
 // Σ_faces ΔΩ_f · max(0, I(ω_f)) of the injected flux Φ (the face solid angles and directions of
@@ -499,12 +527,62 @@ TEST(LpvReach, UniformPlaneIrradianceAgainstExact) {
               GI_SH_COSCONV0 * GI_SH_Y0 * own.x - GI_SH_COSCONV1 * GI_SH_Y1 * own.y);
 }
 
+// Multiple bounces (lpv.bounces, lpv.cl lpv_face_albedo and lpv_reflect_blocked): the 3 steps of
+// PropagationMatchesHost with reflection after each blocked step (lpvref::reflectBlocked), random
+// surfel albedo sums, a fifth of the nodes without camera surfels (albedo 0 there).
+TEST(LpvBounces, ReflectionMatchesHost) { propagationMatchesHost(kN, true); }
+
+// Energy: a wall of albedo ρ (per channel) reflects ρ times the flux it blocks. One blocked step
+// from a cosine lobe aimed at a wall of occluders (the plane x = 6, facing −x): the flux after the
+// step with reflection minus without it equals ρ times the flux the wall took (open step minus
+// blocked step; the open step keeps all flux inside the grid, LpvEnergy). The reflected light
+// travels back, away from the wall (its x coefficient is negative).
+TEST(LpvBounces, BlockerReflectsAlbedoTimesBlockedFlux) {
+  cl::Context& ctx = test::context();
+  const int n = 8;
+  const glm::vec3 rho(0.8f, 0.5f, 0.2f);
+  lpvref::Grid g(n, 1);
+  for (int ch = 0; ch < 3; ++ch) g.c[g.index(0, ch, {4, 4, 4})] = lpvref::lobe({1, 0, 0}) / lpvref::kPi;  // Φ = 1
+  size_t m = n + 1;
+  std::vector<glm::vec4> wall(m * m * m, glm::vec4(0.0f)), albedo(m * m * m, glm::vec4(rho, 1.0f));
+  for (int z = 0; z <= n; ++z)
+    for (int y = 0; y <= n; ++y) wall[lpvref::nodeIndex(n, 0, {6, y, z})] = lpvref::lobe({-1, 0, 0});
+  auto afterTwoSteps = [&](bool blocking, bool bounces) {
+    LpvVolume v(ctx, n, 1, LpvLookupStorage::Buffer, bounces);
+    v.begin({LpvCascade{glm::vec3(0.0f), 1.0f}}, 1.0f);
+    v.resolve(false);
+    v.setGeometry(wall);
+    if (bounces) v.setSurfelAlbedo(albedo);
+    v.setInjected(g.c);
+    v.propagate(2, blocking);  // step 1 (never blocked) reaches x = 5, step 2 crosses the plane x = 6
+    lpvref::Grid out(n, 1);
+    out.c = v.readCurrent();
+    return out;
+  };
+  lpvref::Grid open = afterTwoSteps(false, false), blocked = afterTwoSteps(true, false),
+               reflected = afterTwoSteps(true, true);
+  for (int ch = 0; ch < 3; ++ch) {
+    double took = lpvref::totalFlux(open, 0, ch) - lpvref::totalFlux(blocked, 0, ch);
+    double gave = lpvref::totalFlux(reflected, 0, ch) - lpvref::totalFlux(blocked, 0, ch);
+    std::printf("channel %d: the wall took %.5f of flux 1, reflected %.5f = %.4f of it (albedo %.2f)\n", ch, took, gave,
+                gave / took, rho[ch]);
+    EXPECT_GT(took, 0.05);
+    // Both steps round T_f to half precision; the open step does not: ΔΩ_f/π − T_f of the unblocked
+    // faces is then up to 2^-12 of ΔΩ_f/π of either sign, which the reflection clamps at 0.
+    EXPECT_NEAR(gave, rho[ch] * took, 2e-3 * took);
+    double x = 0.0;
+    for (size_t i = 0; i < reflected.cells(); ++i) x += reflected.c[reflected.index(0, ch, glm::ivec3(0)) + i].w -
+                                                      blocked.c[blocked.index(0, ch, glm::ivec3(0)) + i].w;
+    EXPECT_LT(x, 0.0);
+  }
+}
+
 TEST(LpvDeterminism, SameBitsTwice) {
   CornellOptions o;
   o.withAreaLight = false;
   o.spotLight = CornellSpotLight{};
   Scene s = makeCornellBox(o);
-  for (const char* cascades : {"lpv.cascades=0", "lpv.cascades=3"}) {
+  for (const char* cascades : {"lpv.cascades=0", "lpv.cascades=3", "lpv.bounces=true"}) {
     RenderSettings rs;
     rs.width = 64;
     rs.height = 64;

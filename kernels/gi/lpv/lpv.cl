@@ -115,6 +115,10 @@ inline void atomic_add_fixed4(global long* acc, long4 v) {
 #if LPV_LANES == 16
 typedef float16 floatL;
 typedef int16 intL;
+typedef ushort16 ushortL;
+#define convert_intL convert_int16
+#define convert_floatL convert_float16
+#define as_floatL as_float16
 #define vloadL vload16
 #define vstoreL vstore16
 #define LPV_LANE_IDS (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
@@ -123,6 +127,10 @@ typedef int16 intL;
 #elif LPV_LANES == 8
 typedef float8 floatL;
 typedef int8 intL;
+typedef ushort8 ushortL;
+#define convert_intL convert_int8
+#define convert_floatL convert_float8
+#define as_floatL as_float8
 #define vloadL vload8
 #define vstoreL vstore8
 #define LPV_LANE_IDS (int8)(0, 1, 2, 3, 4, 5, 6, 7)
@@ -131,6 +139,10 @@ typedef int8 intL;
 #elif LPV_LANES == 4
 typedef float4 floatL;
 typedef int4 intL;
+typedef ushort4 ushortL;
+#define convert_intL convert_int4
+#define convert_floatL convert_float4
+#define as_floatL as_float4
 #define vloadL vload4
 #define vstoreL vstore4
 #define LPV_LANE_IDS (int4)(0, 1, 2, 3)
@@ -139,6 +151,10 @@ typedef int4 intL;
 #else
 typedef float floatL;
 typedef int intL;
+typedef ushort ushortL;
+#define convert_intL convert_int
+#define convert_floatL convert_float
+#define as_floatL as_float
 #define vload_halfL vload_half
 #define vstore_halfL_rte vstore_half_rte
 #define vloadL(o, p) ((p)[o])
@@ -252,15 +268,18 @@ kernel void lpv_inject(global const float4* rsmPosition, global const float4* rs
 // orthographic view the texel's square), the cosine clamped at 0.1 so that surfaces seen edge-on
 // do not get an unbounded area. Lane-wise (common/vector_width.h): areas and nodes of GI_VW
 // texels at a time as vectors; then the texels are merged into runs one by one, in order.
+// With `albedo` (camera surfels when lpv.bounces is on; null otherwise) each surfel also adds
+// (ρ·w, w), w = A/s², to its node in `albedoAcc`: the area-weighted albedo the blockers reflect
+// with (lpv_face_albedo), merged into runs and added as integers like the potential.
 inline void add_surfels(const GiView* view, global const float4* position, global const float4* normal, int width,
                         int x0, int y, constant float4* cascades, float fixedScale, int source,
-                        global long* geometryAcc) {
+                        global long* geometryAcc, global const float4* albedo, global long* albedoAcc) {
   int runNode[LPV_CASCADES];
-  float4 run[LPV_CASCADES];
+  float4 run[LPV_CASCADES], runAlbedo[LPV_CASCADES];
 #pragma unroll
   for (int k = 0; k < LPV_CASCADES; ++k) {
     runNode[k] = -1;
-    run[k] = (float4)(0.0f);
+    run[k] = runAlbedo[k] = (float4)(0.0f);
   }
   const float3 axis = (float3)(-view->view[2], -view->view[6], -view->view[10]);
   const float3 eye = vload3(0, view->eye);
@@ -300,40 +319,59 @@ inline void add_surfels(const GiView* view, global const float4* position, globa
     vstoreV(GI_SH_LOBE1 * ny, 0, lobeY);
     vstoreV(GI_SH_LOBE1 * nz, 0, lobeZ);
     vstoreV(GI_SH_LOBE1 * nx, 0, lobeX);
+    float rhoR[GI_VW], rhoG[GI_VW], rhoB[GI_VW];
+    if (albedo) {
+      floatV r, g, b, unused;
+      GI_GATHER_AOS4(float, (global const float*)albedo, texel, r, g, b, unused);
+      vstoreV(r, 0, rhoR);
+      vstoreV(g, 0, rhoG);
+      vstoreV(b, 0, rhoB);
+    }
     for (int i = 0; i < GI_VW; ++i) {
       float4 lobe = (float4)(GI_SH_LOBE0, lobeY[i], lobeZ[i], lobeX[i]);
 #pragma unroll
       for (int k = 0; k < LPV_CASCADES; ++k) {
         if (node[k][i] != runNode[k]) {
-          if (runNode[k] >= 0)
+          if (runNode[k] >= 0) {
             atomic_add_fixed4(geometryAcc + ((size_t)(k * 2 + source) * LPV_NODES + runNode[k]) * 4,
                               to_fixed4(run[k], fixedScale));
+            if (albedo)
+              atomic_add_fixed4(albedoAcc + ((size_t)k * LPV_NODES + runNode[k]) * 4, to_fixed4(runAlbedo[k], fixedScale));
+          }
           runNode[k] = node[k][i];
-          run[k] = (float4)(0.0f);
+          run[k] = runAlbedo[k] = (float4)(0.0f);
         }
-        if (runNode[k] >= 0) run[k] += lobe * weight[k][i];
+        if (runNode[k] >= 0) {
+          run[k] += lobe * weight[k][i];
+          if (albedo) runAlbedo[k] += (float4)(rhoR[i], rhoG[i], rhoB[i], 1.0f) * weight[k][i];
+        }
       }
     }
   }
   for (int k = 0; k < LPV_CASCADES; ++k)
-    if (runNode[k] >= 0)
+    if (runNode[k] >= 0) {
       atomic_add_fixed4(geometryAcc + ((size_t)(k * 2 + source) * LPV_NODES + runNode[k]) * 4,
                         to_fixed4(run[k], fixedScale));
+      if (albedo)
+        atomic_add_fixed4(albedoAcc + ((size_t)k * LPV_NODES + runNode[k]) * 4, to_fixed4(runAlbedo[k], fixedScale));
+    }
 }
 
 kernel void lpv_geometry_rsm(GiView view, global const float4* rsmPosition, global const float4* rsmNormal,
                              int rsmRes, constant float4* cascades, float fixedScale, global long* geometryAcc) {
   int x0 = get_global_id(0) * LPV_RUN, y = get_global_id(1);
   if (y >= rsmRes || x0 >= rsmRes) return;
-  add_surfels(&view, rsmPosition, rsmNormal, rsmRes, x0, y, cascades, fixedScale, 0, geometryAcc);
+  add_surfels(&view, rsmPosition, rsmNormal, rsmRes, x0, y, cascades, fixedScale, 0, geometryAcc, 0, 0);
 }
 
+// `albedo` and `albedoAcc` null unless lpv.bounces is on (the RSM has no albedo plane: the blockers'
+// albedo comes from the camera's surfels only).
 kernel void lpv_geometry_camera(GiView view, global const float4* position, global const float4* geoNormal,
                                 int width, int height, constant float4* cascades, float fixedScale,
-                                global long* geometryAcc) {
+                                global long* geometryAcc, global const float4* albedo, global long* albedoAcc) {
   int x0 = get_global_id(0) * LPV_RUN, y = get_global_id(1);
   if (y >= height || x0 >= width) return;
-  add_surfels(&view, position, geoNormal, width, x0, y, cascades, fixedScale, 1, geometryAcc);
+  add_surfels(&view, position, geoNormal, width, x0, y, cascades, fixedScale, 1, geometryAcc, albedo, albedoAcc);
 }
 
 // ---- resolve ----------------------------------------------------------------------------------
@@ -719,6 +757,137 @@ kernel void lpv_propagate_open(global const float* src, global float* dst, globa
   lpv_propagate_step(src, dst, accumulated, 0, k, accumulate, cascades, lookupGrid, false);
 }
 
+// ---- multiple bounces (lpv.bounces; Kaplanyan & Dachsbacher 2010, "multiple indirect bounces") ----
+//
+// Light that the geometry volume blocks in a propagation step is not lost: the blocker reflects
+// it diffusely with its albedo ρ and it propagates on in the next steps, which gives the orders
+// >= 3 of the transport. For light leaving cell c along d towards c + d, the flux the shared face
+// blocks is Σ_f (ΔΩ_f/π − T_f) · max(0, I_c(ω_f)) · π over the 5 faces (the step transmits
+// T_f · I, the open step ΔΩ_f/π · I; T_f as stored by lpv_face_factors, so the blocked and the
+// transmitted flux add up to the open flux exactly). A fraction ρ of it leaves the blocker as a
+// Lambertian emitter: coefficients ρ · Φ_b/π · lobe(n) (the VPL injection's form), added to c —
+// the side the light came from — with n the normal of the blocker, the direction of the face
+// potential's linear part (Σ A·n of its surfels) turned towards c (−d where that part is zero).
+
+// Area-weighted albedo of each cell's 3 lower faces, once per frame: Σ ρ·w / Σ w over the face's 4
+// corner nodes (integer sums: exact, in any order); 0 where no camera surfel lies at those nodes
+// (the RSM has no albedo). Planes a·4 + ch of the grids' row-block layout (LPV_AT). Global
+// (N / LPV_LANES, N, N · 3 · LPV_CASCADES) with z + N·(k·3 + a) along the third axis.
+kernel void lpv_face_albedo(global const long* albedoAcc, global float* faceAlbedo) {
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2) % LPV_N;
+  int slab = get_global_id(2) / LPV_N, k = slab / 3, a = slab % 3;  // slab = k·3 + axis
+  size_t u = a == 0 ? LPV_M : 1, v = a == 2 ? LPV_M : LPV_M * LPV_M;  // the face's two in-plane axes
+  global float* out = faceAlbedo + LPV_PAD + LPV_AT(k, a * 4, x0, y, z);
+  for (int l = 0; l < LPV_LANES; ++l) {
+    size_t n0 = (size_t)k * LPV_NODES + (size_t)(z * LPV_M + y) * LPV_M + x0 + l;
+    long4 sum = vload4(n0, albedoAcc) + vload4(n0 + u, albedoAcc) + vload4(n0 + v, albedoAcc) +
+                vload4(n0 + u + v, albedoAcc);
+    float4 f = lpv_fixed_to_float4(sum);  // the fixed-point scale cancels in the ratio
+    float4 rho = f.w > 0.0f ? f / f.w : (float4)(0.0f);
+    out[l] = rho.x;
+    out[l + LPV_N] = rho.y;
+    out[l + 2 * LPV_N] = rho.z;
+  }
+}
+
+// LPV_LANES halves from any half-aligned address as floats. The x neighbours' factors lie one half
+// off the row's alignment: PoCL's vload_half8 compiled to an aligned 16-byte load there (a crash),
+// and clang's __fp16 vectors with 2-byte alignment to much slower code. So the bits are loaded as one unaligned ushort vector and widened
+// exactly by integer operations: a normal half (exponent e > 0) is the float with exponent e + 112
+// and the mantissa shifted by 13; a subnormal is its mantissa × 2^-24 (the half grid's inputs are
+// finite: clamped to ±65504 where they are written).
+inline floatL lpv_load_half_unaligned(global const half* p) {
+  intL h = convert_intL(vloadL(0, (global const ushort*)p));
+  intL sign = (h & 0x8000) << 16, magnitude = h & 0x7fff;
+  floatL normal = as_floatL(sign | ((magnitude << 13) + (112 << 23)));
+  floatL subnormal = convert_floatL(magnitude) * 0x1.0p-24f;
+  return select(normal, select(subnormal, -subnormal, sign != 0), magnitude < 0x400);
+}
+
+// The reflection of one blocked step of cascade k (after lpv_propagate_blocked read `src` and wrote
+// `dst`): each cell's light that the faces to its 6 neighbours blocked, reflected back into the
+// cell and added to `dst` (so the next step propagates it) and, when that step added its result
+// to the accumulated grid (`addToAccumulated`), there too. Work-item = LPV_LANES cells of a row,
+// as the step. The factors of the faces c → c + d are those lpv_face_factors stored at c + d for
+// direction d.
+kernel void lpv_reflect_blocked(global const float* src, global float* dst, global float* accumulated,
+                                global const half* faceFactors, global const half* faceGeometry,
+                                global const float* faceAlbedo, int k, int addToAccumulated) {
+  int x0 = get_global_id(0) * LPV_LANES, y = get_global_id(1), z = get_global_id(2);
+  size_t row = LPV_PAD + LPV_AT(k, 0, x0, y, z), factorRow = LPV_PAD + LPV_FACTOR_AT(k, 0, x0, y, z);
+  // Whether c + d lies in the grid: per row for y and z; per lane for x (open factor 0 there).
+  bool rowInside[6] = {true, true, y < LPV_N - 1, y >= 1, z < LPV_N - 1, z >= 1};
+  intL x = x0 + LPV_LANE_IDS;
+  const float mainWeight = LPV_MAIN_FACE_SOLID_ANGLE * GI_INV_PI, sideWeight = LPV_SIDE_FACE_SOLID_ANGLE * GI_INV_PI;
+  floatL openX[2] = {select((floatL)(0.0f), (floatL)(1.0f), x < LPV_N - 1), select((floatL)(0.0f), (floatL)(1.0f), x >= 1)};
+  const int stride[3] = {1, LPV_ROW, LPV_SLICE}, factorStride[3] = {1, LPV_FACTOR_ROW, LPV_FACTOR_SLICE};
+  // The 12 own coefficients and 12 sums stay in registers over the 6 directions; each direction's
+  // 5 blocked factors, normal and albedo are loaded and converted once for the 3 channels (channel
+  // after channel instead, reloading them, looked slower in single runs: docs/PERFORMANCE.md).
+  floatL own[3][4], o[3][4];
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch)
+#pragma unroll
+    for (int q = 0; q < 4; ++q) {
+      own[ch][q] = vloadL(0, src + row + (ch * 4 + q) * LPV_N);
+      o[ch][q] = (floatL)(0.0f);
+    }
+#pragma unroll
+  for (int dir = 0; dir < 6; ++dir) {
+    if (!rowInside[dir]) continue;
+    int a = dir / 2, b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+    float s = dir % 2 ? -1.0f : 1.0f;
+    int step = dir % 2 ? -1 : 1;
+    floatL open = a == 0 ? openX[dir & 1] : (floatL)(1.0f);
+    // Blocked factors ΔΩ_f/π − T_f of the faces c → c + d (stored at c + d).
+    global const half* factors = faceFactors + factorRow + step * factorStride[a] + dir * 5 * LPV_N;
+    floatL blocked[5];
+#pragma unroll
+    for (int f = 0; f < 5; ++f)
+      blocked[f] = fmax(open * (f == 0 ? mainWeight : sideWeight) - lpv_load_half_unaligned(factors + f * LPV_N), 0.0f);
+    // The shared face: the lower face along a of c + d (d = +e_a) or of c (d = −e_a).
+    size_t face = row + (dir % 2 ? 0 : stride[a]);
+    floatL g[4];
+#pragma unroll
+    for (int q = 1; q < 4; ++q) g[q] = lpv_load_half_unaligned(faceGeometry + face + (a * 4 + q) * LPV_N);
+    // Blocker normal (y, z, x order as the coefficients), turned towards c: n·d <= 0.
+    floatL l2 = g[1] * g[1] + g[2] * g[2] + g[3] * g[3];
+    floatL inv = select((floatL)(0.0f), rsqrt(l2), l2 > 1e-30f) *
+                 select((floatL)(1.0f), (floatL)(-1.0f), s * g[LPV_COEF(a)] > 0.0f);
+    floatL n[4];  // coefficient order: unused, y, z, x
+#pragma unroll
+    for (int q = 1; q < 4; ++q) n[q] = g[q] * inv;
+    n[LPV_COEF(a)] = select(n[LPV_COEF(a)], (floatL)(-s), l2 <= 1e-30f);
+#pragma unroll
+    for (int ch = 0; ch < 3; ++ch) {
+      const floatL* in = own[ch];
+      // I_c(ω_f) in grid units, as lpv_faces evaluates them.
+      floatL fMain = fmax(fma(in[LPV_COEF(a)], (floatL)(s / LPV_SIDE_SCALE), in[0]), 0.0f);
+      floatL side = fma(in[LPV_COEF(a)], (floatL)(2.0f * s), in[0]);
+      floatL flux = blocked[0] * fMain;  // Φ_b/π
+      flux = fma(blocked[1], fmax(side + in[LPV_COEF(b1)], 0.0f), flux);
+      flux = fma(blocked[2], fmax(side - in[LPV_COEF(b1)], 0.0f), flux);
+      flux = fma(blocked[3], fmax(side + in[LPV_COEF(b2)], 0.0f), flux);
+      flux = fma(blocked[4], fmax(side - in[LPV_COEF(b2)], 0.0f), flux);
+      floatL reflected = vloadL(0, faceAlbedo + face + (a * 4 + ch) * LPV_N) * flux;
+      o[ch][0] += reflected;
+#pragma unroll
+      for (int q = 1; q < 4; ++q) o[ch][q] = fma(reflected, n[q], o[ch][q]);
+    }
+  }
+  const float lobe[4] = {GI_SH_LOBE0 * LPV_UNIT0, GI_SH_LOBE1 * LPV_UNIT1, GI_SH_LOBE1 * LPV_UNIT1,
+                         GI_SH_LOBE1 * LPV_UNIT1};  // Lambertian emitter, in grid units
+#pragma unroll
+  for (int ch = 0; ch < 3; ++ch)
+#pragma unroll
+    for (int q = 0; q < 4; ++q) {
+      size_t at = row + (ch * 4 + q) * LPV_N;
+      floatL out = lobe[q] * o[ch][q];
+      vstoreL(vloadL(0, dst + at) + out, 0, dst + at);
+      if (addToAccumulated) vstoreL(vloadL(0, accumulated + at) + out, 0, accumulated + at);
+    }
+}
+
 // ---- lookup ----------------------------------------------------------------------------------
 
 // The lookup grid: per cascade k, cell and channel ch one float4 (LPV_LOOKUP_AT) holding the
@@ -767,7 +936,7 @@ inline int lpv_min_lane(intV v) {
 // from cascade k (per lane): trilinear over cell centres at p + ½ cell along ng (clamped at the
 // grid's border cells) in the lookup grid, E = Σ_corners weight · (q0 − q·n).
 __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, intV k, float3V p, float3V ng,
-                               float3V n, floatV* e) {
+                               float3V n, float offset, floatV* e) {
   // Cell coordinates (p − origin)/s + ½·ng − ½ with 1/s per cascade (a scalar division each, not
   // 3 vector divisions per lane).
   floatV ox = 0.0f, oy = 0.0f, oz = 0.0f, invS = 1.0f;
@@ -780,9 +949,9 @@ __attribute__((always_inline)) inline void cascade_irradiance(LPV_LOOKUP_GRID gr
     oz = GI_SEL(oz, (floatV)(c.z), here);
     invS = GI_SEL(invS, (floatV)(1.0f / c.w), here);
   }
-  floatV ux = clamp(fma(p.x - ox, invS, fma(0.5f, ng.x, -0.5f)), 0.0f, (float)(LPV_N - 1));
-  floatV uy = clamp(fma(p.y - oy, invS, fma(0.5f, ng.y, -0.5f)), 0.0f, (float)(LPV_N - 1));
-  floatV uz = clamp(fma(p.z - oz, invS, fma(0.5f, ng.z, -0.5f)), 0.0f, (float)(LPV_N - 1));
+  floatV ux = clamp(fma(p.x - ox, invS, fma(offset, ng.x, -0.5f)), 0.0f, (float)(LPV_N - 1));
+  floatV uy = clamp(fma(p.y - oy, invS, fma(offset, ng.y, -0.5f)), 0.0f, (float)(LPV_N - 1));
+  floatV uz = clamp(fma(p.z - oz, invS, fma(offset, ng.z, -0.5f)), 0.0f, (float)(LPV_N - 1));
 #if LPV_IMAGES
   // The sampler filters lane by lane: texel centres at integer + ½, slab (k·3 + ch) at depth (k·3 + ch)·N.
   float u[3][GI_VW], q[3][4][GI_VW];
@@ -850,12 +1019,30 @@ inline floatV cascade_blend(float4 cascade, float3V p) {
   return fmax(ax, fmax(ay, az));
 }
 
+// Irradiance at `offset` cells along ng from cascade k, mixed with the next coarser cascade by a.
+__attribute__((always_inline)) inline void blended_irradiance(LPV_LOOKUP_GRID grid, constant float4* cascades, intV k, floatV a,
+                                                              float3V p, float3V ng, float3V n, float offset, floatV* e) {
+  cascade_irradiance(grid, cascades, k, p, ng, n, offset, e);
+  if (GI_ANY(a > 0.0f)) {
+    floatV coarse[3];
+    cascade_irradiance(grid, cascades, min(k + 1, (intV)(LPV_CASCADES - 1)), p, ng, n, offset, coarse);
+#pragma unroll
+    for (int ch = 0; ch < 3; ++ch) e[ch] = mix(e[ch], coarse[ch], a);
+  }
+}
+
+// `damping` (lpv.damping; Kaplanyan 2009, self-illumination): the irradiance E(x) a surface
+// receives is light travelling along −n, whose sources lie on the n side; where E decreases
+// along n (its directional derivative along the normal is negative) the light flows away from
+// the surface — its own light, or light bled through it — and is damped. The derivative is
+// taken as a forward difference over one cell (the grid's resolution, the heuristic's only
+// parameter): E is limited to max(E(x + s·ng), 0), s the cell edge.
 // GI_VW pixels of a row per work-item (global (⌈width / GI_VW⌉, height)). `blendCascades` = 0 for
 // a single grid fitted to the scene; else per pixel the finest cascade whose blend factor is below
 // 1, mixed with the next coarser one by that factor (constant-trip loops only).
 kernel void lpv_lookup(int width, int height, global const float* position, global const float* geoNormal,
                        global const float* normal, global const float* albedo, constant float4* cascades,
-                       int blendCascades, LPV_LOOKUP_GRID grid, global float4* out) {
+                       int blendCascades, int damping, LPV_LOOKUP_GRID grid, global float4* out) {
   int x0 = get_global_id(0) * GI_VW, y = get_global_id(1);
   if (x0 >= width || y >= height) return;
   intV x = x0 + GI_LANES;
@@ -881,12 +1068,12 @@ kernel void lpv_lookup(int width, int height, global const float* position, glob
     a = GI_SEL(a, (floatV)(0.0f), k == LPV_CASCADES - 1);  // the coarsest cascade blends with nothing
   }
   floatV e[3];
-  cascade_irradiance(grid, cascades, k, p, ng, n, e);
-  if (GI_ANY(a > 0.0f)) {
-    floatV coarse[3];
-    cascade_irradiance(grid, cascades, min(k + 1, (intV)(LPV_CASCADES - 1)), p, ng, n, coarse);
+  blended_irradiance(grid, cascades, k, a, p, ng, n, 0.5f, e);
+  if (damping) {  // Kaplanyan 2009's damping of light that flows away from the surface
+    floatV outer[3];
+    blended_irradiance(grid, cascades, k, a, p, ng, n, 1.5f, outer);
 #pragma unroll
-    for (int ch = 0; ch < 3; ++ch) e[ch] = mix(e[ch], coarse[ch], a);
+    for (int ch = 0; ch < 3; ++ch) e[ch] = fmin(e[ch], fmax(outer[ch], 0.0f));
   }
   floatV keep = GI_SEL((floatV)(0.0f), (floatV)(GI_INV_PI), covered);
   floatV lr = fmax(rho.x * keep * e[0], 0.0f), lg = fmax(rho.y * keep * e[1], 0.0f), lb = fmax(rho.z * keep * e[2], 0.0f);

@@ -7,7 +7,9 @@
 // scene bounds, 1..4 camera-centred levels, default 3), extent (metres of the finest cascade;
 // 0 = so that the coarsest covers the scene from the first frame's camera), iterations (0 = the resolution), rsm_size (RSM merged to
 // this size before injection), occlusion (geometry-volume blocking), injection_bias (VPL shift in
-// cells along its normal), lookup_storage (auto / buffer / image). Handles diffuse transport only; one bounce (the RSM's).
+// cells along its normal), lookup_storage (auto / buffer / image), bounces (blocked light reflected by the blockers: orders >= 3),
+// damping (Kaplanyan 2009: irradiance decreasing along the normal is damped).
+// Handles diffuse transport only; one bounce (the RSM's) unless lpv.bounces.
 #include "gi/lpv/lpv_technique.h"
 
 #include <algorithm>
@@ -33,7 +35,8 @@ public:
     cascades_ = p.getInt("lpv.cascades");
     volume_ = std::make_unique<LpvVolume>(f.ctx, p.getInt("lpv.resolution"), std::max(cascades_, 1),
                                           lookupStorage(p.getChoice("lpv.lookup_storage"), f.ctx.device(),
-                                                        p.getInt("lpv.resolution"), std::max(cascades_, 1)));
+                                                        p.getInt("lpv.resolution"), std::max(cascades_, 1)),
+                                          p.getBool("lpv.bounces") && p.getBool("lpv.occlusion"));
   }
 
   void render(const FrameResources& f, cl::Buffer& indirect) override {
@@ -54,7 +57,7 @@ public:
     if (occlusion) volume_->addGeometryCamera(f.gbuffer);
     volume_->resolve(occlusion);
     volume_->propagate(iterations, occlusion);
-    volume_->lookup(f.gbuffer, cascades_ > 0, indirect);
+    volume_->lookup(f.gbuffer, cascades_ > 0, indirect, p.getBool("lpv.damping"));
   }
 
 private:
@@ -102,6 +105,12 @@ TechniqueInfo lpvTechniqueInfo() {
             p.addInt("lpv.iterations", 0, 0, 1024, "propagation steps; 0 = the grid resolution");
             p.addInt("lpv.rsm_size", 256, 16, 4096, "RSM texels per side after merging for injection; must divide rsm.resolution");
             p.addBool("lpv.occlusion", true, "geometry-volume blocking (from RSM and camera surfels)");
+            p.addBool("lpv.bounces", false,
+                      "multiple bounces (Kaplanyan & Dachsbacher 2010): light the geometry volume blocks is reflected "
+                      "diffusely with the camera surfels' albedo and propagates on; needs lpv.occlusion");
+            p.addBool("lpv.damping", false,
+                      "Kaplanyan 2009's self-illumination damping: irradiance that decreases along the normal (light "
+                      "flowing away from the surface) is limited to the irradiance one cell further out");
             p.addFloat("lpv.injection_bias", 0.5, 0.0, 2.0, "VPL shift along its normal before injection, in cells");
             p.addChoice("lpv.lookup_storage", "auto", {"auto", "buffer", "image"},
                         "grid the lookup reads: a 3D image (hardware trilinear filtering) or a buffer; auto = image on GPUs");

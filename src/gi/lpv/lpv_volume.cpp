@@ -96,13 +96,14 @@ int propagationLanes(int vectorWidth, int n) {
   return 1;
 }
 
-LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLookupStorage storage)
+LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLookupStorage storage, bool bounces)
     : ctx_(ctx),
       storage_(storage),
       n_(resolution),
       cascades_(cascadeCount),
       vw_(cl::gatherVectorWidth(ctx)),
-      lanes_(propagationLanes(vw_, resolution)) {
+      lanes_(propagationLanes(vw_, resolution)),
+      bounces_(bounces) {
   bool images = storage_ == LpvLookupStorage::Image;
   if (images)  // the (cascade, channel) slabs stacked along z
     lookupImage_ = LpvImage(ctx, size_t(n_), size_t(n_), size_t(n_) * 3 * cascades_);
@@ -133,6 +134,8 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   propagateOpen_ = program_.kernel("lpv_propagate_open");
   toLookupGrid_ = program_.kernel("lpv_lookup_grid");
   lookup_ = program_.kernel("lpv_lookup");
+  faceAlbedoKernel_ = program_.kernel("lpv_face_albedo");
+  reflectBlocked_ = program_.kernel("lpv_reflect_blocked");
   size_t cells = cellsPerGrid() * cascades_, nodes = nodesPerGrid() * cascades_;
   layout_ = cl::Buffer(ctx, size_t(cascades_) * 16, CL_MEM_READ_ONLY, "lpv cascade layout");
   gridAcc_ = cl::Buffer(ctx, cells * 3 * 4 * 8, CL_MEM_READ_WRITE, "lpv injection sums");
@@ -155,6 +158,11 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   faceFactors_ = cl::Buffer(ctx, factorHalves * sizeof(uint16_t), CL_MEM_READ_WRITE, "lpv face factors");
   ctx.fill(faceFactors_, uint16_t(0));  // padding and skew stay 0
   lookupGrid_ = cl::Buffer(ctx, cells * 3 * 16, CL_MEM_READ_WRITE, "lpv lookup grid");
+  if (bounces_) {
+    albedoAcc_ = cl::Buffer(ctx, nodes * 4 * 8, CL_MEM_READ_WRITE, "lpv surfel albedo sums");
+    faceAlbedo_ = cl::Buffer(ctx, gridBytes, CL_MEM_READ_WRITE, "lpv face albedo");  // planes a·4 + ch of a grid
+    ctx.fill(faceAlbedo_, 0.0f);
+  }
   // One row of cells per work-group: many groups, which PoCL spreads over the cores.
   propagateRange_ = cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_));  // one cascade
   propagateRange_.local[0] = size_t(n_ / lanes_);
@@ -175,6 +183,7 @@ size_t LpvVolume::gridOffset(int k, int p, size_t cell) const {
 uint64_t LpvVolume::bytes() const {
   return layout_.bytes() + gridAcc_.bytes() + geometryAcc_.bytes() + grids_[0].bytes() + grids_[1].bytes() +
          accumulated_.bytes() + geometry_.bytes() + faceGeometry_.bytes() + faceFactors_.bytes() + lookupGrid_.bytes() +
+         (bounces_ ? albedoAcc_.bytes() + faceAlbedo_.bytes() : 0) +
          (lookupImage_.get() ? lookupImage_.bytes() : 0);
 }
 
@@ -186,6 +195,7 @@ void LpvVolume::begin(const std::vector<LpvCascade>& layout, float injectionFixe
   injectionScale_ = injectionFixedScale;
   ctx_.fill(gridAcc_, int64_t(0));
   ctx_.fill(geometryAcc_, int64_t(0));
+  if (bounces_) ctx_.fill(albedoAcc_, int64_t(0));
   current_ = 0;
   lookupGridCurrent_ = false;
 }
@@ -205,8 +215,9 @@ void LpvVolume::addGeometryRsm(const GiView& view, const cl::Buffer& position, c
 }
 
 void LpvVolume::addGeometryCamera(const GBuffer& g) {
+  cl::Buffer none;  // without bounces the kernel gets null albedo pointers and skips them
   geometryCamera_.args(g.view, g.position, g.geoNormal, g.width, g.height, layout_, kGeometryFixedScale,
-                       geometryAcc_);
+                       geometryAcc_, bounces_ ? g.albedo : none, bounces_ ? albedoAcc_ : none);
   size_t runs = size_t(g.width + kRunLength - 1) / kRunLength;
   ctx_.launch(geometryCamera_, cl::NDRange::d2(runs, size_t(g.height)), "lpv: geometry (camera)");
 }
@@ -268,6 +279,16 @@ void LpvVolume::setGeometry(const std::vector<glm::vec4>& nodeValues) {
   ctx_.write(geometry_, planes.data(), planes.size() * sizeof(float));
 }
 
+void LpvVolume::setSurfelAlbedo(const std::vector<glm::vec4>& nodeValues) {
+  size_t nodes = nodesPerGrid();
+  if (!bounces_) throw Error("lpv: surfel albedo set on a volume without bounces");
+  if (nodeValues.size() != nodes * cascades_) throw Error("lpv: surfel albedo of the wrong size");
+  std::vector<int64_t> sums(nodeValues.size() * 4);
+  for (size_t i = 0; i < nodeValues.size(); ++i)
+    for (int c = 0; c < 4; ++c) sums[i * 4 + c] = std::llrint(double(nodeValues[i][c]) * kGeometryFixedScale);
+  ctx_.write(albedoAcc_, sums.data(), sums.size() * sizeof(int64_t));
+}
+
 void LpvVolume::propagate(int iterations, bool blocking) {
   if (blocking && iterations > 1) {
     faceGeometryKernel_.args(geometry_, faceGeometry_);
@@ -276,7 +297,13 @@ void LpvVolume::propagate(int iterations, bool blocking) {
     faceFactorsKernel_.args(faceGeometry_, faceFactors_);
     ctx_.launch(faceFactorsKernel_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * cascades_),
                 "lpv: propagate");
+    if (bounces_) {
+      faceAlbedoKernel_.args(albedoAcc_, faceAlbedo_);
+      ctx_.launch(faceAlbedoKernel_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * 3 * cascades_),
+                  "lpv: bounces");
+    }
   }
+  bool reflect = bounces_ && blocking;
   // Cascade after cascade, all steps of one before the next: a step touches 6 MB per 32³ cascade
   // (two grids, the accumulated grid, the face potentials), which the last-level cache holds for
   // one cascade but not for three (all cascades in one launch per step: 0.92 instead of 0.50–0.58 ms
@@ -296,6 +323,11 @@ void LpvVolume::propagate(int iterations, bool blocking) {
         propagateBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceFactors_, k, accumulate,
                                layout_, lookupGrid_);
         ctx_.launch(propagateBlocked_, propagateRange_, "lpv: propagate");
+        if (reflect) {  // into the step's result (and the accumulated grid where the step added it)
+          reflectBlocked_.args(grids_[current_], grids_[1 - current_], accumulated_, faceFactors_, faceGeometry_,
+                               faceAlbedo_, k, accumulate & addThis);
+          ctx_.launch(reflectBlocked_, propagateRange_, "lpv: bounces");
+        }
       } else {
         propagateOpen_.args(grids_[current_], grids_[1 - current_], accumulated_, k, accumulate, layout_,
                             lookupGrid_);
@@ -304,10 +336,12 @@ void LpvVolume::propagate(int iterations, bool blocking) {
       current_ = 1 - current_;
     }
   }
-  if (iterations > 0) lookupGridCurrent_ = true;
+  // With reflection the last step's lookup grid lacks that step's reflected light: lookup()
+  // converts the accumulated grid again.
+  if (iterations > 0) lookupGridCurrent_ = !(reflect && iterations > 1);
 }
 
-void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out) {
+void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out, bool damping) {
   if (!lookupGridCurrent_) {  // the grid was set or resolved after the last propagation step
     toLookupGrid_.args(accumulated_, layout_, lookupGrid_);
     ctx_.launch(toLookupGrid_, cl::NDRange::d3(size_t(n_ / lanes_), size_t(n_), size_t(n_) * 3 * cascades_),
@@ -317,10 +351,10 @@ void LpvVolume::lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out) {
   if (storage_ == LpvLookupStorage::Image) {
     lookupImage_.copy(ctx_, lookupGrid_);
     lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
-                 lookupImage_.get(), out);
+                 int(damping), lookupImage_.get(), out);
   } else {
     lookup_.args(g.width, g.height, g.position, g.geoNormal, g.normal, g.albedo, layout_, int(blendCascades),
-                 lookupGrid_, out);
+                 int(damping), lookupGrid_, out);
   }
   size_t groups = (size_t(g.width) + vw_ - 1) / vw_;  // GI_VW pixels per work-item
   ctx_.launch(lookup_, cl::NDRange::d2(cl::roundUp(groups, 16), cl::roundUp(g.height, 4), 16, 4), "lpv: lookup");

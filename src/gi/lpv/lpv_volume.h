@@ -69,10 +69,14 @@ public:
   static constexpr float kGeometryFixedScale = 1099511627776.0f;  // 2^40
 
   // Throws gi::Error when `storage` is Image and the device has no 3D images of the size needed.
-  LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLookupStorage storage = LpvLookupStorage::Buffer);
+  // `bounces` (lpv.bounces): blocked light is reflected by the blockers with the albedo of the
+  // camera's surfels (Kaplanyan & Dachsbacher 2010, multiple indirect bounces; lpv.cl).
+  LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLookupStorage storage = LpvLookupStorage::Buffer,
+            bool bounces = false);
 
   int resolution() const { return n_; }
   int cascadeCount() const { return cascades_; }
+  bool bounces() const { return bounces_; }
   size_t cellsPerGrid() const { return size_t(n_) * n_ * n_; }
   size_t nodesPerGrid() const { return size_t(n_ + 1) * (n_ + 1) * (n_ + 1); }
   // The float grids' row-block layout (lpv.cl LPV_AT): floats in all cascades, and the offset of
@@ -92,11 +96,14 @@ public:
   void resolve(bool geometry);  // sums -> float grids (the geometry volume only when asked)
   // `iterations` gather steps; with `blocking`, first the blocking potential per cell face from
   // the geometry volume and from it the 30 face factors per cell (static over the steps), which
-  // block every step but the first.
+  // block every step but the first; with bounces() each blocked step's blocked light is then
+  // reflected back into the cells it came from (lpv_reflect_blocked).
   void propagate(int iterations, bool blocking);
   // Converts the accumulated grid into the lookup grid unless the last propagation step already
   // did, then writes L = ρ/π · E per pixel.
-  void lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out);
+  // With `damping` (lpv.damping): Kaplanyan 2009's damping of light flowing away from the surface,
+  // E limited to the irradiance one cell further along the geometric normal (lpv.cl lpv_lookup).
+  void lookup(const GBuffer& g, bool blendCascades, cl::Buffer& out, bool damping = false);
 
   // For tests, coefficients as float4 [cascade][rgb][cell] (the device keeps planes, lpv.cl):
   // the grid the last step wrote (the injected grid before any step), the accumulated grid.
@@ -107,18 +114,24 @@ public:
   // The geometry volume as float4 [cascade][node], read or replaced.
   std::vector<glm::vec4> readGeometry();
   void setGeometry(const std::vector<glm::vec4>& nodes);
+  // With bounces(): the camera surfels' albedo sums per node as float4 [cascade][node]
+  // (Σ ρ_r·w, Σ ρ_g·w, Σ ρ_b·w, Σ w), replaced (stored in the kernels' fixed point).
+  void setSurfelAlbedo(const std::vector<glm::vec4>& nodes);
 
 private:
   std::vector<glm::vec4> readGrid(const cl::Buffer& b);
 
   cl::Context& ctx_;
   LpvLookupStorage storage_;
-  int n_, cascades_, vw_, lanes_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
+  int n_, cascades_, vw_, lanes_;
+  bool bounces_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
   float injectionScale_ = 1.0f;
   cl::Program program_;
   cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, faceGeometryKernel_, faceFactorsKernel_, propagateBlocked_, propagateOpen_,
-      toLookupGrid_, lookup_;
+      toLookupGrid_, lookup_,
+      faceAlbedoKernel_, reflectBlocked_;
   cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, faceGeometry_, faceFactors_, lookupGrid_;
+  cl::Buffer albedoAcc_, faceAlbedo_;  // with bounces_: surfel albedo sums per node, albedo per cell face
   LpvImage lookupImage_;  // with LpvLookupStorage::Image: lookupGrid_'s copy the lookup samples
   cl::NDRange propagateRange_;
   int current_ = 0;
