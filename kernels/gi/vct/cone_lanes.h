@@ -73,11 +73,17 @@ __attribute__((always_inline)) inline void vct_pair_planes8(global const float* 
                        vload8(0, p + i.s4), vload8(0, p + i.s5), vload8(0, p + i.s6), vload8(0, p + i.s7), out);
 }
 
-// The planes of the blend w0·pair(p + i0) + w1·pair(p + i1) + w2·pair(p + i2) per lane: three
-// volumes with the same stencil combined before the one transposition.
-#define VCT_BLEND3_LANE(k) (w0.s##k * vload8(0, p + i0.s##k) + w1.s##k * vload8(0, p + i1.s##k) + w2.s##k * vload8(0, p + i2.s##k))
-__attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const float* p, int8 i0, int8 i1, int8 i2,
+// The planes of the blend w0·pair(px + i0) + w1·pair(py + i1) + w2·pair(pz + i2) per lane: three
+// volumes with the same stencil combined before the one transposition. The volumes' bases go into
+// px, py, pz where they are the same in every lane (the lanes' directions face the same way along
+// each axis, the common case) and i0 = i1 = i2: then one offset is taken out of the lane vector per
+// lane instead of three; else px = py = pz and the bases are in the offsets. The offsets are
+// non-negative: zero-extended into the address (no sign extension per lane).
+#define VCT_BLEND3_LANE(k) (w0.s##k * vload8(0, px + u0.s##k) + w1.s##k * vload8(0, py + u1.s##k) + w2.s##k * vload8(0, pz + u2.s##k))
+__attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const float* px, global const float* py,
+                                                                   global const float* pz, int8 i0, int8 i1, int8 i2,
                                                                    float8 w0, float8 w1, float8 w2, float8 out[8]) {
+  uint8 u0 = as_uint8(i0), u1 = as_uint8(i1), u2 = as_uint8(i2);
   vct_transpose_pairs8(VCT_BLEND3_LANE(0), VCT_BLEND3_LANE(1), VCT_BLEND3_LANE(2), VCT_BLEND3_LANE(3),
                        VCT_BLEND3_LANE(4), VCT_BLEND3_LANE(5), VCT_BLEND3_LANE(6), VCT_BLEND3_LANE(7), out);
 }
@@ -137,6 +143,26 @@ __attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const 
   }
 #endif
 
+// Whether every lane of a mask (0 / −1 per lane) is set, without branches: the lanes ANDed in
+// halves, then the sign. PoCL's all() on int16 tests the lanes two by two with a branch after
+// each pair, which costs mispredictions where the answer is data-dependent (shared stencils).
+#if GI_VW == 16
+inline int vct_all(int16 m) {
+  int8 a = m.lo & m.hi;
+  int4 b = a.lo & a.hi;
+  int2 c = b.lo & b.hi;
+  return (c.x & c.y) < 0;
+}
+#elif GI_VW == 8
+inline int vct_all(int8 m) {
+  int4 b = m.lo & m.hi;
+  int2 c = b.lo & b.hi;
+  return (c.x & c.y) < 0;
+}
+#else
+inline int vct_all(int m) { return m != 0; }
+#endif
+
 // Lane 0's value of a lane vector.
 #if GI_VW == 1
 #define VCT_LANE0(v) (v)
@@ -144,27 +170,27 @@ __attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const 
 #define VCT_LANE0(v) ((v).s0)
 #endif
 
-// VCT_GATHER_PAIR of the blend Σ_k w_k·pair(p + i_k) of three volumes (vct_pair_planes8_blend3).
+// VCT_GATHER_PAIR of the blend Σ_k w_k·pair(p_k + i_k) of three volumes (vct_pair_planes8_blend3).
 #if GI_VW == 16
-#define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1) \
-  {                                                                                    \
-    float8 lo_[8], hi_[8];                                                             \
-    vct_pair_planes8_blend3(p, (i0).lo, (i1).lo, (i2).lo, (w0).lo, (w1).lo, (w2).lo, lo_); \
-    vct_pair_planes8_blend3(p, (i0).hi, (i1).hi, (i2).hi, (w0).hi, (w1).hi, (w2).hi, hi_); \
-    VCT_UNPACK_HALVES(lo_, hi_, R0, G0, B0, A0, R1, G1, B1, A1)                        \
+#define VCT_GATHER_PAIR_BLEND3(px, py, pz, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1)               \
+  {                                                                                                          \
+    float8 lo_[8], hi_[8];                                                                                   \
+    vct_pair_planes8_blend3(px, py, pz, (i0).lo, (i1).lo, (i2).lo, (w0).lo, (w1).lo, (w2).lo, lo_);          \
+    vct_pair_planes8_blend3(px, py, pz, (i0).hi, (i1).hi, (i2).hi, (w0).hi, (w1).hi, (w2).hi, hi_);          \
+    VCT_UNPACK_HALVES(lo_, hi_, R0, G0, B0, A0, R1, G1, B1, A1)                                              \
   }
 #elif GI_VW == 8
-#define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1) \
-  {                                                                                    \
-    float8 t_[8];                                                                      \
-    vct_pair_planes8_blend3(p, i0, i1, i2, w0, w1, w2, t_);                            \
-    VCT_UNPACK_PLANES(t_, R0, G0, B0, A0, R1, G1, B1, A1)                              \
+#define VCT_GATHER_PAIR_BLEND3(px, py, pz, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1) \
+  {                                                                                            \
+    float8 t_[8];                                                                              \
+    vct_pair_planes8_blend3(px, py, pz, i0, i1, i2, w0, w1, w2, t_);                           \
+    VCT_UNPACK_PLANES(t_, R0, G0, B0, A0, R1, G1, B1, A1)                                      \
   }
 #elif GI_VW == 1
-#define VCT_GATHER_PAIR_BLEND3(p, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1)                 \
-  {                                                                                                    \
-    float8 a_ = (w0) * vload8(0, (p) + (i0)) + (w1) * vload8(0, (p) + (i1)) + (w2) * vload8(0, (p) + (i2)); \
-    VCT_UNPACK_RECORD(a_, R0, G0, B0, A0, R1, G1, B1, A1)                                              \
+#define VCT_GATHER_PAIR_BLEND3(px, py, pz, i0, i1, i2, w0, w1, w2, R0, G0, B0, A0, R1, G1, B1, A1)                    \
+  {                                                                                                               \
+    float8 a_ = (w0) * vload8(0, (px) + (i0)) + (w1) * vload8(0, (py) + (i1)) + (w2) * vload8(0, (pz) + (i2));    \
+    VCT_UNPACK_RECORD(a_, R0, G0, B0, A0, R1, G1, B1, A1)                                                       \
   }
 #endif
 
@@ -280,8 +306,8 @@ __attribute__((always_inline)) inline void vox_trilinear_blend3_lanes(global con
     intV idx = (((st.zr[zb] << shift) + st.yr[yb]) << shift) + st.xs;
     floatV wRow = st.wy[yb] * st.wz[zb] * weight;
     floatV r0, g0, b0_, a0, r1, g1, b1_, a1;
-    VCT_GATHER_PAIR_BLEND3(vol, 4 * (base0 + idx), 4 * (base1 + idx), 4 * (base2 + idx), b0, b1, b2, r0, g0, b0_, a0,
-                           r1, g1, b1_, a1)
+    VCT_GATHER_PAIR_BLEND3(vol, vol, vol, 4 * (base0 + idx), 4 * (base1 + idx), 4 * (base2 + idx), b0, b1, b2, r0, g0,
+                           b0_, a0, r1, g1, b1_, a1)
     vct_add_pair(acc, st.wFirst * wRow, st.wSecond * wRow, r0, g0, b0_, a0, r1, g1, b1_, a1);
   }
 }
@@ -365,8 +391,9 @@ __attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelM
   int x0 = VCT_LANE0(xs), y0 = VCT_LANE0(yr[0]), y1 = VCT_LANE0(yr[1]), z0 = VCT_LANE0(zr[0]), z1 = VCT_LANE0(zr[1]);
   int bx0 = VCT_LANE0(bx), by0 = VCT_LANE0(by), bz0 = VCT_LANE0(bz);
   // (Level 0 is left out: its 1-voxel cells are rarely shared, and the test costs more than it saves.)
-  int shared = level > 0 && GI_ALL(xs == x0 && yr[0] == y0 && yr[1] == y1 && zr[0] == z0 && zr[1] == z1 &&
-                                   bx == bx0 && by == by0 && bz == bz0);
+  int sameBases = vct_all(bx == bx0 && by == by0 && bz == bz0);
+  int shared = level > 0 && sameBases &&
+               vct_all(xs == x0 && yr[0] == y0 && yr[1] == y1 && zr[0] == z0 && zr[1] == z1);
 #pragma unroll
   for (int row = 0; row < 4; ++row) {
     int yb = row & 1, zb = row >> 1;
@@ -374,31 +401,36 @@ __attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelM
     floatV r0, g0, b0, a0, r1, g1, b1, a1;
     if (shared) {
       int idx0 = 4 * (((((zb ? z1 : z0) << shift) + (yb ? y1 : y0)) << shift) + x0);
-      float8 px = vload8(0, chain + bx0 + idx0);
+      // Scalar loads (not one vload8 per volume): each value then enters its multiply as a
+      // broadcast memory operand, with no shuffle to spread an element of a loaded vector.
+      global const float *px = chain + bx0 + idx0, *py = chain + by0 + idx0, *pz = chain + bz0 + idx0;
       if (directional) {
-        float8 py = vload8(0, chain + by0 + idx0), pz = vload8(0, chain + bz0 + idx0);
-        r0 = dx2 * px.s0 + dy2 * py.s0 + dz2 * pz.s0;
-        g0 = dx2 * px.s1 + dy2 * py.s1 + dz2 * pz.s1;
-        b0 = dx2 * px.s2 + dy2 * py.s2 + dz2 * pz.s2;
-        a0 = dx2 * px.s3 + dy2 * py.s3 + dz2 * pz.s3;
-        r1 = dx2 * px.s4 + dy2 * py.s4 + dz2 * pz.s4;
-        g1 = dx2 * px.s5 + dy2 * py.s5 + dz2 * pz.s5;
-        b1 = dx2 * px.s6 + dy2 * py.s6 + dz2 * pz.s6;
-        a1 = dx2 * px.s7 + dy2 * py.s7 + dz2 * pz.s7;
+        r0 = dx2 * px[0] + dy2 * py[0] + dz2 * pz[0];
+        g0 = dx2 * px[1] + dy2 * py[1] + dz2 * pz[1];
+        b0 = dx2 * px[2] + dy2 * py[2] + dz2 * pz[2];
+        a0 = dx2 * px[3] + dy2 * py[3] + dz2 * pz[3];
+        r1 = dx2 * px[4] + dy2 * py[4] + dz2 * pz[4];
+        g1 = dx2 * px[5] + dy2 * py[5] + dz2 * pz[5];
+        b1 = dx2 * px[6] + dy2 * py[6] + dz2 * pz[6];
+        a1 = dx2 * px[7] + dy2 * py[7] + dz2 * pz[7];
       } else {
-        r0 = (floatV)(px.s0);
-        g0 = (floatV)(px.s1);
-        b0 = (floatV)(px.s2);
-        a0 = (floatV)(px.s3);
-        r1 = (floatV)(px.s4);
-        g1 = (floatV)(px.s5);
-        b1 = (floatV)(px.s6);
-        a1 = (floatV)(px.s7);
+        r0 = (floatV)(px[0]);
+        g0 = (floatV)(px[1]);
+        b0 = (floatV)(px[2]);
+        a0 = (floatV)(px[3]);
+        r1 = (floatV)(px[4]);
+        g1 = (floatV)(px[5]);
+        b1 = (floatV)(px[6]);
+        a1 = (floatV)(px[7]);
       }
     } else {
       intV idx = 4 * ((((zr[zb] << shift) + yr[yb]) << shift) + xs);
-      if (directional) {
-        VCT_GATHER_PAIR_BLEND3(chain, bx + idx, by + idx, bz + idx, dx2, dy2, dz2, r0, g0, b0, a0, r1, g1, b1, a1)
+      if (directional && sameBases) {
+        VCT_GATHER_PAIR_BLEND3(chain + bx0, chain + by0, chain + bz0, idx, idx, idx, dx2, dy2, dz2, r0, g0, b0, a0, r1,
+                               g1, b1, a1)
+      } else if (directional) {
+        VCT_GATHER_PAIR_BLEND3(chain, chain, chain, bx + idx, by + idx, bz + idx, dx2, dy2, dz2, r0, g0, b0, a0, r1,
+                               g1, b1, a1)
       } else {
         VCT_GATHER_PAIR(chain, bx + idx, r0, g0, b0, a0, r1, g1, b1, a1)
       }
@@ -555,6 +587,14 @@ inline RgbaV vct_cone_lanes(VoxelMipsV m, global const uchar* emptySpace, float3
 // vct_cone_levels for GI_VW cones of one half-angle (the diffuse set): every lane has the same
 // distances, levels and steps, so the schedule is scalar and each step is one trilinear lookup per
 // lane (one level, uniform across the lanes).
+// The steps run in chunks of VCT_LEVEL_CHUNK: first the chunk's lookups back to back (a lookup does
+// not depend on the compositing, only on the position), then their compositing. Compositing one
+// step right after its lookup put the long dependent chain of (1 − α)^(Δt/D) (log2, exp2, two
+// divisions) between every two lookups; grouped, the chains of the chunk's steps overlap. Same
+// operations per lane as stepping one at a time (same bits): a lane that left the grid is masked
+// from that step on, and one saturated in a chunk's compositing is masked from there on (the
+// chunk's remaining lookups are wasted for it; the march still ends when every lane is done).
+#define VCT_LEVEL_CHUNK 4
 inline RgbaV vct_cone_levels_lanes(VoxelMipsV m, float3V o, float3V d, float tanHalf, float maxDistance,
                                    float aoLambda, floatV* occlusion) {
   RgbaV c;
@@ -563,26 +603,46 @@ inline RgbaV vct_cone_levels_lanes(VoxelMipsV m, float3V o, float3V d, float tan
   intV done = (intV)(0);
   float tPrevious = 0.0f, limit = (float)m.N;
   float diameter = 1.0f;
-  for (int level = 0;; ++level, diameter *= 2.0f) {
-    float t = diameter * (0.5f / tanHalf);
-    if (t > maxDistance) break;
-    float step = t - tPrevious;
-    tPrevious = t;
-    float margin = 0.5f * diameter;
-    float3V p = addV(o, scaleV(d, (floatV)(t)));
-    done = done || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin || p.y > limit + margin ||
-           p.z > limit + margin;
-    if (GI_ALL(done)) break;
-    RgbaV s;
-    s.r = s.g = s.b = s.a = (floatV)(0.0f);
-    vox_level_sample_uniform_lanes(m, min(level, m.levels - 1), p, d, &s);
+  int level = 0, more = 1;
+  while (more) {
+    RgbaV s[VCT_LEVEL_CHUNK];
+    intV doneAt[VCT_LEVEL_CHUNK];
+    float stepOverDiameter[VCT_LEVEL_CHUNK], aoFalloff[VCT_LEVEL_CHUNK];
+    int count = 0;
+    intV left = done;  // lanes done before each lookup (left the grid, or saturated in an earlier chunk)
+    for (; count < VCT_LEVEL_CHUNK; ++count, ++level, diameter *= 2.0f) {
+      float t = diameter * (0.5f / tanHalf);
+      if (t > maxDistance) {
+        more = 0;
+        break;
+      }
+      float step = t - tPrevious;
+      tPrevious = t;
+      float margin = 0.5f * diameter;
+      float3V p = addV(o, scaleV(d, (floatV)(t)));
+      left = left || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin ||
+             p.y > limit + margin || p.z > limit + margin;
+      if (vct_all(left)) {
+        more = 0;
+        break;
+      }
+      s[count].r = s[count].g = s[count].b = s[count].a = (floatV)(0.0f);
+      vox_level_sample_uniform_lanes(m, min(level, m.levels - 1), p, d, &s[count]);
 #if GI_VCT_SH
-    s.r = fmax(s.r, 0.0f);
-    s.g = fmax(s.g, 0.0f);
-    s.b = fmax(s.b, 0.0f);
+      s[count].r = fmax(s[count].r, 0.0f);
+      s[count].g = fmax(s[count].g, 0.0f);
+      s[count].b = fmax(s[count].b, 0.0f);
 #endif
-    vct_composite_lanes(s, !done, (floatV)(step / diameter), (floatV)(1.0f / (1.0f + aoLambda * t)), &c, &occ);
-    done = done || c.a >= 0.99f;
+      doneAt[count] = left;
+      stepOverDiameter[count] = step / diameter;
+      aoFalloff[count] = 1.0f / (1.0f + aoLambda * t);
+    }
+    for (int k = 0; k < count; ++k) {
+      done = done || doneAt[k];
+      vct_composite_lanes(s[k], !done, (floatV)(stepOverDiameter[k]), (floatV)(aoFalloff[k]), &c, &occ);
+      done = done || c.a >= 0.99f;
+    }
+    if (vct_all(done)) break;
   }
   *occlusion = occ;
   return c;
