@@ -345,6 +345,10 @@ Program Context::buildProgram(const std::string& kernelFile, const Defines& defi
   bool ownWidth = std::any_of(defines.begin(), defines.end(), [](const auto& d) { return d.first == "GI_VW"; });
   if (!ownWidth) options += " -DGI_VW=" + std::to_string(vectorWidth());
   options += device_.isCpu ? " -DGI_DEVICE_CPU=1" : " -DGI_DEVICE_GPU=1";
+  // Kernels that pick a CPU-specific instruction form by measurement (rsm_gather.cl) need to know
+  // whose CPU it is: the same AVX-512 instruction can be the fast form on one vendor's cores and
+  // the slow one on another's.
+  if (device_.isCpu && device_.vendor.find("AMD") != std::string::npos) options += " -DGI_CPU_AMD=1";
   for (auto& [k, v] : defines) options += " -D" + k + (v.empty() ? "" : "=" + v);
 
   uint64_t key = fnv1a64(source);

@@ -173,7 +173,7 @@ public:
   int vectorWidth() const { return vectorWidth_; }
 
   // Builds kernels/<file> (includes expanded) with the given defines plus the per-device ones
-  // (GI_VW, GI_DEVICE_CPU/GPU). Uses the on-disk binary cache. Build failures throw gi::Error
+  // (GI_VW, GI_DEVICE_CPU/GPU, GI_CPU_AMD). Uses the on-disk binary cache. Build failures throw gi::Error
   // with the compiler's messages, which name kernel file:line.
   Program buildProgram(const std::string& kernelFile, const Defines& defines = {});
 

@@ -167,9 +167,12 @@ typedef struct {
 // "`rsm` gather with AVX-512 hardware gathers"). Gathering the four 32-bit words separately
 // (vpgatherdd, twice the loads) took 1.3× the time of the 64-bit halves. Not used with AVX2 (GI_VW
 // 8): AVX2 gathers were 2× slower than the portable form on the AMD Zen 3 this engine also runs
-// on. The builtin takes a flat pointer: x86 OpenCL CPU devices have one address space (only they
-// define __AVX512F__); other devices, and compilers without the builtin, take the portable form.
-#if defined(__has_builtin) && GI_VW == 16 && defined(__AVX512F__)
+// on. Not used on AMD CPUs either: on the AVX-512 AMD EPYC of 2 Dec 2026 (fifth session) the
+// portable form's gather took 9.6–10.9 ms against 11.4–16.2 ms with these gathers (six alternating
+// idle pairs, docs/PERFORMANCE.md, "rsm gather on an AMD AVX-512 CPU"). The builtin takes a flat
+// pointer: x86 OpenCL CPU devices have one address space (only they define __AVX512F__); other
+// devices, and compilers without the builtin, take the portable form.
+#if defined(__has_builtin) && GI_VW == 16 && defined(__AVX512F__) && !defined(GI_CPU_AMD)
 #if __has_builtin(__builtin_ia32_gathersiv8di)
 #define RSM_GATHER_HALVES(records, k, at8)                                                              \
   as_int16(__builtin_ia32_gathersiv8di((long8)(0), (const void*)(size_t)((records) + 2 * (k)), (at8), \
