@@ -197,6 +197,20 @@ typedef ulong ulongV;
 #define GI_SEL(a, b, c) select(a, b, c)
 #endif
 
+// Stores the first `valid` lanes of v (lane type T: float, int or uint) at p[i …]: one vector
+// store where all GI_VW lanes are valid, else through a private array (the last work-item of a
+// row may hold fewer pixels than lanes).
+#define GI_STORE_LANES(T, v, p, i, valid)                               \
+  {                                                                     \
+    if ((valid) == GI_VW) {                                             \
+      vstoreV(v, 0, (p) + (i));                                         \
+    } else {                                                            \
+      T lanes_[GI_VW];                                                  \
+      vstoreV(v, 0, lanes_);                                            \
+      for (int l_ = 0; l_ < (valid); ++l_) (p)[(i) + l_] = lanes_[l_]; \
+    }                                                                   \
+  }
+
 typedef struct {
   floatV x, y, z;
 } float3V;

@@ -258,13 +258,7 @@ kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global 
 #undef GI_S
 #undef GI_STORE_PLANE
   uintV inst = GI_SEL((uintV)(GI_INVALID_ID), GI_GATHER(uintV, triangleInstance, tg), surface);
-  if (valid == GI_VW) {
-    vstoreV(inst, 0, outInstance + i);
-  } else {
-    uint tmpI[GI_VW];
-    vstoreV(inst, 0, tmpI);
-    for (int l = 0; l < valid; ++l) outInstance[i + l] = tmpI[l];
-  }
+  GI_STORE_LANES(uint, inst, outInstance, i, valid)
 }
 
 // Reflective shadow map (ALGORITHMS.md §1), one work-item per texel of the light's view:

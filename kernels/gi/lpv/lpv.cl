@@ -883,8 +883,8 @@ kernel void lpv_reflect_blocked(global const float* src, global float* dst, glob
     for (int q = 0; q < 4; ++q) {
       size_t at = row + (ch * 4 + q) * LPV_N;
       floatL out = lobe[q] * o[ch][q];
-      vstoreL(vloadL(0, dst + at) + out, 0, dst + at);
-      if (addToAccumulated) vstoreL(vloadL(0, accumulated + at) + out, 0, accumulated + at);
+      lpv_storeL(vloadL(0, dst + at) + out, dst + at);
+      if (addToAccumulated) lpv_storeL(vloadL(0, accumulated + at) + out, accumulated + at);
     }
 }
 

@@ -78,15 +78,7 @@ inline floatV ssao_load1(global const float* plane, int i, int valid) {
   return GI_GATHER(floatV, plane + i, idx);
 }
 
-inline void ssao_store1(global float* plane, int i, int valid, floatV v) {
-  if (valid == GI_VW) {
-    vstoreV(v, 0, plane + i);
-  } else {
-    float t[GI_VW];
-    vstoreV(v, 0, t);
-    for (int l = 0; l < valid; ++l) plane[i + l] = t[l];
-  }
-}
+inline void ssao_store1(global float* plane, int i, int valid, floatV v) { GI_STORE_LANES(float, v, plane, i, valid) }
 
 // Camera space here: c = (x_view, y_view, depth) with depth = −z_view (the G-buffer's linear view
 // depth); a point projects to the pixel coordinates sx = cx + fx·c.x/c.z, sy = cy − fy·c.y/c.z
@@ -177,13 +169,7 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
   ssao_store1(gridSlopeX, i0, valid, GI_SEL(zero, A * gx, surface));
   ssao_store1(gridSlopeY, i0, valid, GI_SEL(zero, A * gy, surface));
 #endif
-  if (valid == GI_VW) {
-    vstoreV(w, 0, records + i0);
-  } else {
-    uint t[GI_VW];
-    vstoreV(w, 0, t);
-    for (int l = 0; l < valid; ++l) records[i0 + l] = t[l];
-  }
+  GI_STORE_LANES(uint, w, records, i0, valid)
 }
 
 // t + 1 clamped to [0, n + 1], NaN -> 0, as two selects that compile to one vmaxps and one vminps
