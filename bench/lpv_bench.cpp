@@ -28,6 +28,7 @@
 
 #include "cl/runtime.h"
 #include "gi/lpv/lpv_volume.h"
+#include "gi/technique.h"
 #include "kernels/common/sh.h"
 #include "scene/cornell_box.h"
 #include "scene/scene_loader.h"
@@ -206,10 +207,12 @@ int main(int argc, char** argv) {
     if (!passes.empty()) {
       std::printf("lpv passes alone: %s, %dx%d, %s, median of %d runs\n", scene.name.c_str(), a.width, a.height,
                   ctx.device().name.c_str(), a.frames);
-      auto has = [&](const std::string& set) {
-        return std::find(extraSets.begin(), extraSets.end(), set) != extraSets.end();
-      };
-      timePasses(ctx, scene, a, passes, has("lpv.bounces=true"), has("lpv.damping=true"));
+      // The technique's own parameter parsing (true / 1 / on, range checks) for the lpv.* sets.
+      ParamSet lpvParams;
+      findTechnique("lpv")->declareParams(lpvParams);
+      for (const std::string& set : extraSets)
+        if (set.rfind("lpv.", 0) == 0) lpvParams.set(set);
+      timePasses(ctx, scene, a, passes, lpvParams.getBool("lpv.bounces"), lpvParams.getBool("lpv.damping"));
       return 0;
     }
     std::printf("lpv bench: %s, %dx%d, %s, median of %d frames after %d warm-up\n", scene.name.c_str(), a.width,

@@ -112,6 +112,7 @@ std::vector<DeviceInfo> listDevices() {
       d.isGpu = (type & CL_DEVICE_TYPE_GPU) != 0;
       d.isCpu = (type & CL_DEVICE_TYPE_CPU) != 0;
       d.globalMemBytes = deviceValue<cl_ulong>(id, CL_DEVICE_GLOBAL_MEM_SIZE);
+      d.globalCacheBytes = deviceValue<cl_ulong>(id, CL_DEVICE_GLOBAL_MEM_CACHE_SIZE);
       d.maxAllocBytes = deviceValue<cl_ulong>(id, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
       d.localMemBytes = deviceValue<cl_ulong>(id, CL_DEVICE_LOCAL_MEM_SIZE);
       d.computeUnits = deviceValue<cl_uint>(id, CL_DEVICE_MAX_COMPUTE_UNITS);

@@ -32,6 +32,7 @@ struct DeviceInfo {
   std::string name, vendor, platformName, platformVersion, deviceVersion, driverVersion;
   bool isGpu = false, isCpu = false;
   uint64_t globalMemBytes = 0, maxAllocBytes = 0, localMemBytes = 0;
+  uint64_t globalCacheBytes = 0;  // CL_DEVICE_GLOBAL_MEM_CACHE_SIZE (0: none or not reported)
   unsigned computeUnits = 0;
   bool imageSupport = false;
   bool image3dWrites = false;  // cl_khr_3d_image_writes

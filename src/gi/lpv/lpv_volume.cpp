@@ -110,8 +110,7 @@ LpvVolume::LpvVolume(cl::Context& ctx, int resolution, int cascadeCount, LpvLook
   // A propagation step's working set per cascade: source, destination and accumulated grids (12
   // floats per cell each) and the 30 half-precision face factors. Larger than the last-level cache
   // (64³: 53.5 MB against 32 MiB), the step prefetches all its streams (lpv.cl LPV_PREFETCH_STREAMS).
-  cl_ulong cacheBytes = 0;
-  clGetDeviceInfo(ctx.device().id, CL_DEVICE_GLOBAL_MEM_CACHE_SIZE, sizeof(cacheBytes), &cacheBytes, nullptr);
+  uint64_t cacheBytes = ctx.device().globalCacheBytes;
   bool streamPrefetch = cacheBytes > 0 && cellsPerGrid() * (3 * 12 * sizeof(float) + 30 * sizeof(uint16_t)) > cacheBytes;
   // GI_VW: texels or pixels per work-item of the injection, surfel and lookup kernels (a divisor of LPV_RUN).
   program_ = ctx.buildProgram("kernels/gi/lpv/lpv.cl", {{"LPV_N", std::to_string(n_)},

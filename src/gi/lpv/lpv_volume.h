@@ -123,13 +123,12 @@ private:
 
   cl::Context& ctx_;
   LpvLookupStorage storage_;
-  int n_, cascades_, vw_, lanes_;
-  bool bounces_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
+  int n_, cascades_, vw_, lanes_;  // vw_: GI_VW (cl/gather_width.h); lanes_: cells per propagation work-item
+  bool bounces_;
   float injectionScale_ = 1.0f;
   cl::Program program_;
   cl::Kernel inject_, geometryRsm_, geometryCamera_, resolveInjection_, resolveGeometry_, faceGeometryKernel_, faceFactorsKernel_, propagateBlocked_, propagateOpen_,
-      toLookupGrid_, lookup_,
-      faceAlbedoKernel_, reflectBlocked_;
+      toLookupGrid_, lookup_, faceAlbedoKernel_, reflectBlocked_;
   cl::Buffer layout_, gridAcc_, geometryAcc_, grids_[2], accumulated_, geometry_, faceGeometry_, faceFactors_, lookupGrid_;
   cl::Buffer albedoAcc_, faceAlbedo_;  // with bounces_: surfel albedo sums per node, albedo per cell face
   LpvImage lookupImage_;  // with LpvLookupStorage::Image: lookupGrid_'s copy the lookup samples
