@@ -4,7 +4,9 @@
 SSIM is checked against scikit-image's structural_similarity(gaussian_weights=True, sigma=1.5,
 use_sample_covariance=False, data_range=1), per channel then averaged; mean LDR-FLIP against
 NVIDIA's flip_evaluator package (LDR mode, default 67.02 ppd). Both must agree within 1e-3
-(docs/METRICS.md). The magma FLIP heat map must match flip_evaluator's colours on at least 99% of
+(docs/METRICS.md). `grade255` (ten Brug's grade on an SSIM with data_range=255 over [0, 1] values,
+black-in-both pixels left out) is recomputed from scikit-image's SSIM maps; its per-channel MSSIM
+must agree within 1e-6. The magma FLIP heat map must match flip_evaluator's colours on at least 99% of
 pixels, within 4/255 everywhere (values on an index boundary may round to the next entry). Image pairs (noise, blur, colour shift, ...) are generated with numpy from a
 fixed seed and stored as 8-bit PNGs, so both sides read exactly the same values.
 
@@ -21,6 +23,9 @@ import sys
 import tempfile
 
 TOLERANCE = 1e-3
+# grade255's per-channel MSSIM (SSIM with data_range=255 on [0, 1] values) sits within ~1e-3 of 1,
+# and the grade multiplies its error by ~1e4 (d(10 m^1000)/dm), so it is held much closer.
+GRADE255_MSSIM_TOLERANCE = 1e-6
 PACKAGES = ["numpy", "imageio", "scikit-image", "flip-evaluator"]
 
 
@@ -109,14 +114,14 @@ def main():
     np, imageio, skm, flip_evaluator = import_or_install(os.path.join(work, "pydeps"))
 
     failures = 0
-    worst_ssim = worst_flip = 0.0
+    worst_ssim = worst_flip = worst_grade = 0.0
     print(f"{'pair':<14} {'ssim gi':>10} {'ssim skimage':>12} {'diff':>9}   {'flip gi':>9} {'flip ref':>9} {'diff':>9}")
     for name, ref, test in make_pairs(np):
         rp, tp, jp = (os.path.join(work, f"{name}_{s}") for s in ("ref.png", "test.png", "metrics.json"))
         imageio.imwrite(rp, (ref * 255.0 + 0.5).astype(np.uint8))
         imageio.imwrite(tp, (test * 255.0 + 0.5).astype(np.uint8))
         hp = os.path.join(work, f"{name}_flip.png")
-        r = subprocess.run([gi, "compare", "--reference", rp, "--test", tp, "--metrics", "ssim,flip", "--json", jp,
+        r = subprocess.run([gi, "compare", "--reference", rp, "--test", tp, "--metrics", "ssim,grade255,flip", "--json", jp,
                             "--heatmap", hp],
                            capture_output=True, text=True)
         if r.returncode != 0:
@@ -124,7 +129,8 @@ def main():
             failures += 1
             continue
         with open(jp) as f:
-            got = json.load(f)["metrics"]
+            doc = json.load(f)
+        got, got_details = doc["metrics"], doc["details"]
 
         # Read back what gi read, so both sides see identical 8-bit values.
         ref8 = imageio.imread(rp).astype(np.float64) / 255.0
@@ -132,6 +138,18 @@ def main():
         ssim_ref = float(np.mean([
             skm.structural_similarity(ref8[..., c], test8[..., c], gaussian_weights=True, sigma=1.5,
                                       use_sample_covariance=False, data_range=1.0) for c in range(3)]))
+        # grade255: per-channel SSIM maps with data_range=255 on the [0, 1] values, the 5-pixel border
+        # cropped, pixels black (below half an 8-bit level) in both images left out, 10 x mean MSSIM^1000.
+        interior = (slice(5, -5), slice(5, -5))
+        black = np.all(ref8[interior] < 0.5 / 255.0, axis=-1) & np.all(test8[interior] < 0.5 / 255.0, axis=-1)
+        mssim255 = []
+        for c in range(3):
+            _, smap = skm.structural_similarity(ref8[..., c], test8[..., c], gaussian_weights=True, sigma=1.5,
+                                                use_sample_covariance=False, data_range=255.0, full=True)
+            mssim255.append(float(np.mean(smap[interior][~black])))
+        grade255_ref = 10.0 * float(np.mean(np.clip(mssim255, 0.0, 1.0) ** 1000))
+        dg = max(abs(a - b) for a, b in zip(got_details["grade255_mssim_rgb"], mssim255))
+        worst_grade = max(worst_grade, dg)
         magma_ref, flip_ref, _ = flip_evaluator.evaluate(ref8.astype(np.float32), test8.astype(np.float32), "LDR")
         # Heat maps: gi's magma PNG against flip_evaluator's magma map, both as 8-bit colours.
         heat_gi = imageio.imread(hp)[..., :3].astype(np.int32)
@@ -141,12 +159,14 @@ def main():
         ds, df = abs(got["ssim"] - ssim_ref), abs(got["flip"] - float(flip_ref))
         worst_ssim, worst_flip = max(worst_ssim, ds), max(worst_flip, df)
         # Error values on a magma index boundary may round to the neighbouring entry (≤ 2/255 apart).
-        bad = ds > TOLERANCE or df > TOLERANCE or heat_off > 0.01 or heat_max > 4
+        bad = (ds > TOLERANCE or df > TOLERANCE or heat_off > 0.01 or heat_max > 4 or dg > GRADE255_MSSIM_TOLERANCE
+               or abs(got["grade255"] - grade255_ref) > 1e4 * GRADE255_MSSIM_TOLERANCE)
         failures += bad
         print(f"{name:<14} {got['ssim']:>10.6f} {ssim_ref:>12.6f} {ds:>9.2e}   {got['flip']:>9.6f} {float(flip_ref):>9.6f} "
               f"{df:>9.2e}   heat map: {heat_off:.3%} px differ, max {heat_max}/255{'  FAIL' if bad else ''}")
 
-    print(f"max |diff|: ssim {worst_ssim:.2e}, flip {worst_flip:.2e} (tolerance {TOLERANCE:g})")
+    print(f"max |diff|: ssim {worst_ssim:.2e}, flip {worst_flip:.2e} (tolerance {TOLERANCE:g}), "
+          f"grade255 MSSIM {worst_grade:.2e} (tolerance {GRADE255_MSSIM_TOLERANCE:g})")
     print("cross-check: " + (f"FAILED ({failures} pair(s))" if failures else "all pairs agree"))
     return 1 if failures else 0
 

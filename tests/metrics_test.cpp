@@ -168,6 +168,28 @@ TEST(MetricsGrade, BlackMeansBelowHalfAnEightBitLevelInAllChannels) {
   EXPECT_EQ(m::tenBrugGrade(r, t2).countedPixels, 0u);
 }
 
+TEST(MetricsGrade, Grade255UsesEightBitConstantsOnUnitRangeValues) {
+  // Constant images, 0.5 vs 0.3 in every channel: only the luminance term differs from 1, and with
+  // C1 = (0.01·255)² = 6.5025 it is (2·0.15 + C1) / (0.25 + 0.09 + C1) by hand — within 6e-3 of 1,
+  // the nearness to 1 ten Brug reported for every raw score (seed 003 §4.2).
+  Image a(32, 24, 3, 0.5f), b(32, 24, 3, 0.3f);
+  const double c1 = 6.5025, expected = (0.3 + c1) / (0.34 + c1);
+  auto s = m::ssim(a, b, m::kSsimDataRange8Bit);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.channel[c], expected, 1e-9) << "channel " << c;
+  auto g = m::tenBrugGrade(a, b, s);
+  // The grade averages the SSIM map, which is stored as float (rounding ≤ 6e-8 per pixel); the
+  // power 1000 turns that into a relative error ≤ 1e3 × 6e-8 of the grade.
+  const double expectedGrade = 10.0 * std::pow(expected, 1000.0);
+  EXPECT_NEAR(g.grade, expectedGrade, 1e-4 * expectedGrade);
+  // The same pair scores 0 with the grade of ALGORITHMS.md (L = 1): 0.882^1000 underflows.
+  EXPECT_LT(m::tenBrugGrade(a, b).grade, 1e-30);
+  // Noise lowers it, less than it lowers the L = 1 SSIM.
+  Image content = pattern(40, 40), noisy = withNoise(content, 0.05f);
+  double s255 = m::ssim(content, noisy, m::kSsimDataRange8Bit).mean, s1 = m::ssim(content, noisy).mean;
+  EXPECT_LT(s255, 1.0);
+  EXPECT_GT(s255, s1);
+}
+
 TEST(MetricsPixelError, PsnrOfAKnownMse) {
   Image a(20, 10, 3, 0.5f), b(20, 10, 3, 0.6f);  // MSE 0.01 → 20 dB
   EXPECT_NEAR(m::mse(a, b), 0.01, 1e-7);

@@ -79,6 +79,8 @@ Json measureQuality(const Image& linear, float exposure, const std::string& refe
     metrics::SsimResult s = metrics::ssim(refDisplay, testDisplay);
     q["ssim"] = s.mean;
     q["grade"] = metrics::tenBrugGrade(refDisplay, testDisplay, s).grade;
+    q["grade255"] = metrics::tenBrugGrade(refDisplay, testDisplay,
+                                          metrics::ssim(refDisplay, testDisplay, metrics::kSsimDataRange8Bit)).grade;
   }
   metrics::FlipResult f = metrics::flip(refDisplay, testDisplay);
   q["flip"] = f.mean;

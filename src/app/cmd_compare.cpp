@@ -36,7 +36,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kKnownMetrics = {"ssim", "grade", "psnr", "rmse", "relmse", "flip"};
+const std::vector<std::string> kKnownMetrics = {"ssim", "grade", "grade255", "psnr", "rmse", "relmse", "flip"};
 
 std::string joined(const std::vector<std::string>& names) {
   std::string s;
@@ -131,7 +131,7 @@ void runCompare(const Options& o) {
                 std::to_string(ref.display.height) + ", test '" + test.path + "' is " + std::to_string(test.display.width) +
                 "x" + std::to_string(test.display.height));
   auto wants = [&](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
-  bool needSsim = wants("ssim") || wants("grade");
+  bool needSsim = wants("ssim") || wants("grade") || wants("grade255");
   if (needSsim && (ref.display.width < metrics::kSsimMinSize || ref.display.height < metrics::kSsimMinSize))
     throw Error("compare: ssim/grade need images of at least " + std::to_string(metrics::kSsimMinSize) + "x" +
                 std::to_string(metrics::kSsimMinSize) + " pixels ('" + ref.path + "' is " + std::to_string(ref.display.width) +
@@ -147,7 +147,7 @@ void runCompare(const Options& o) {
   };
 
   std::optional<metrics::SsimResult> ssim;
-  if (needSsim) ssim = metrics::ssim(ref.display, test.display);
+  if (wants("ssim") || wants("grade")) ssim = metrics::ssim(ref.display, test.display);
   std::optional<metrics::FlipResult> flip;
   if (wants("flip") || (!o.heatmap.empty() && o.heatmapKind == "flip")) flip = metrics::flip(ref.display, test.display, o.ppd);
 
@@ -164,6 +164,12 @@ void runCompare(const Options& o) {
       details["grade_ignored_black_pixels"] = g.ignoredBlackPixels;
       rows.push_back({n, fmt("%.4f", g.grade), "ten Brug: 10 x mean MSSIM^1000 of R,G,B; " + std::to_string(g.ignoredBlackPixels) +
                                                    " black-in-both px ignored"});
+    } else if (n == "grade255") {
+      auto g = metrics::tenBrugGrade(ref.display, test.display,
+                                     metrics::ssim(ref.display, test.display, metrics::kSsimDataRange8Bit));
+      values["grade255"] = g.grade;
+      details["grade255_mssim_rgb"] = {g.mssim[0], g.mssim[1], g.mssim[2]};
+      rows.push_back({n, fmt("%.4f", g.grade), "ten Brug's grade on SSIM with C1, C2 for L = 255 on [0,1] values (seed-003 tables only)"});
     } else if (n == "psnr") {
       double v = metrics::psnr(ref.display, test.display);
       values["psnr"] = number(v);

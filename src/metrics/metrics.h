@@ -4,6 +4,9 @@
 //     way scikit-image's structural_similarity(gaussian_weights=True, sigma=1.5,
 //     use_sample_covariance=False, data_range=1) does, borders cropped;
 //   - ten Brug's grade (seed 003 §4.2): 10 × mean_c MSSIM_c^1000 over pixels not black in both;
+//     also as `grade255`, the same grade on an SSIM whose constants assume an 8-bit data range
+//     (L = 255) while the display values are in [0, 1] — our reading of how his raw scores came out
+//     ≥ 0.999 (docs/METRICS.md); for comparison with his tables only;
 //   - PSNR on display images (peak 1); RMSE and relative MSE on linear HDR images;
 //   - LDR-FLIP (Andersson, Nilsson, Akenine-Möller, Oskarsson, Åström, Fairchild 2020, "FLIP: A
 //     Difference Evaluator for Alternating Images"), its error map, and the magma colour map.
@@ -22,6 +25,9 @@ namespace gi::metrics {
 
 // ---- SSIM ----------------------------------------------------------------------------------
 constexpr double kSsimK1 = 0.01, kSsimK2 = 0.03, kSsimDataRange = 1.0, kSsimSigma = 1.5;
+// The data range behind `grade255`: C1 = (0.01·255)², C2 = (0.03·255)² on values in [0, 1], so the
+// luminance and contrast terms sit within ~1e-3 of 1 for any image pair (docs/METRICS.md).
+constexpr double kSsimDataRange8Bit = 255.0;
 constexpr int kSsimRadius = 5;  // 11×11 window: scikit-image's truncate=3.5 → int(3.5·1.5 + 0.5)
 constexpr int kSsimMinSize = 2 * kSsimRadius + 1;
 
@@ -33,8 +39,9 @@ struct SsimResult {
   // from every mean, as scikit-image crops them.
   Image map;
 };
-// Throws gi::Error when the images differ in size or are smaller than 11×11.
-SsimResult ssim(const Image& referenceDisplay, const Image& testDisplay);
+// Throws gi::Error when the images differ in size or are smaller than 11×11. `dataRange` is L in
+// C1 = (K1·L)², C2 = (K2·L)²; every metric but `grade255` uses kSsimDataRange.
+SsimResult ssim(const Image& referenceDisplay, const Image& testDisplay, double dataRange = kSsimDataRange);
 
 // ---- ten Brug's grade ----------------------------------------------------------------------
 constexpr double kGradeExponent = 1000.0;

@@ -7,7 +7,7 @@
 //   - local statistics are Gaussian-weighted means (σ = 1.5, 11 taps, weights normalized to sum
 //     to 1) of x, y, x², y², xy; variances are E[x²] − E[x]² (population, not sample, covariance);
 //   - the per-pixel index is ((2μxμy + C1)(2σxy + C2)) / ((μx² + μy² + C1)(σx² + σy² + C2)),
-//     C1 = (0.01·L)², C2 = (0.03·L)², L = 1;
+//     C1 = (0.01·L)², C2 = (0.03·L)², L = 1 (L = 255 only for `grade255`, metrics.h);
 //   - the mean (MSSIM) skips the 5-pixel border, where the window would leave the image.
 // All in double precision, as scikit-image computes on float64.
 #include <algorithm>
@@ -54,7 +54,7 @@ Image toRgb(const Image& image) {
   return out;
 }
 
-SsimResult ssim(const Image& referenceDisplay, const Image& testDisplay) {
+SsimResult ssim(const Image& referenceDisplay, const Image& testDisplay, double dataRange) {
   requireSameSize(referenceDisplay, testDisplay, "ssim");
   const int w = referenceDisplay.width, h = referenceDisplay.height;
   if (w < kSsimMinSize || h < kSsimMinSize)
@@ -63,8 +63,8 @@ SsimResult ssim(const Image& referenceDisplay, const Image& testDisplay) {
   const Image a = toRgb(referenceDisplay), b = toRgb(testDisplay);
   const size_t n = size_t(w) * h;
   const std::vector<double> k = ssimKernel();
-  const double c1 = (kSsimK1 * kSsimDataRange) * (kSsimK1 * kSsimDataRange);
-  const double c2 = (kSsimK2 * kSsimDataRange) * (kSsimK2 * kSsimDataRange);
+  const double c1 = (kSsimK1 * dataRange) * (kSsimK1 * dataRange);
+  const double c2 = (kSsimK2 * dataRange) * (kSsimK2 * dataRange);
 
   SsimResult result;
   result.map = Image(w, h, 3);

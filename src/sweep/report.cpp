@@ -376,7 +376,7 @@ std::string writeReport(const std::string& dirText) {
        "<th class='l'>device</th><th class='l'>technique</th><th class='l'>parameters</th><th>frame wall ms</th>"
        "<th>device ms</th>";
   for (auto& p : passOrder) h += "<th>" + escape(p) + " ms</th>";
-  h += "<th>device MiB</th><th>FLIP</th><th>SSIM</th><th>grade</th><th>relMSE</th><th class='l'>message</th></tr>";
+  h += "<th>device MiB</th><th>FLIP</th><th>SSIM</th><th>grade</th><th>grade255</th><th>relMSE</th><th class='l'>message</th></tr>";
   for (auto& r : rows) {
     bool ok = r["status"] == "ok";
     std::string params;
@@ -394,7 +394,7 @@ std::string writeReport(const std::string& dirText) {
       cell(has, has ? r["passes_ms"][p].get<double>() : 0, "%.3f");
     }
     cell(ok, ok ? r["device_bytes"].get<double>() / (1024.0 * 1024.0) : 0, "%.1f");
-    for (const char* m : {"flip", "ssim", "grade", "relmse"}) {
+    for (const char* m : {"flip", "ssim", "grade", "grade255", "relmse"}) {
       bool has = ok && r["quality"].is_object() && r["quality"][m].is_number();
       cell(has, has ? r["quality"][m].get<double>() : 0, "%.4g");
     }

@@ -72,7 +72,7 @@ OrderedJson flatten(const Configuration& c, const json& result) {
   if (b.contains("quality")) {
     const json& q = b["quality"];
     row["quality"] = OrderedJson::object();
-    for (const char* m : {"ssim", "grade", "flip", "relmse", "psnr_db"}) row["quality"][m] = q.contains(m) ? q[m] : json();
+    for (const char* m : {"ssim", "grade", "grade255", "flip", "relmse", "psnr_db"}) row["quality"][m] = q.contains(m) ? q[m] : json();
     row["heatmap"] = q.value("heatmap", "");
     row["reference"] = q.value("reference", "");
     if (q.contains("reference_spp")) row["reference_spp"] = q["reference_spp"];
@@ -150,7 +150,7 @@ void writeResultTables(const std::string& dir) {
   const std::vector<std::string> fixed = {"id", "status", "message", "scene", "camera", "width", "height", "device",
                                           "technique", "frames", "warmup", "device_name", "driver", "git_revision",
                                           "frame_wall_ms", "device_total_ms", "device_bytes", "host_peak_rss_bytes"};
-  const std::vector<std::string> quality = {"ssim", "grade", "flip", "relmse", "psnr_db"};
+  const std::vector<std::string> quality = {"ssim", "grade", "grade255", "flip", "relmse", "psnr_db"};
   std::string csv;
   auto header = [&](const std::string& h) { csv += (csv.empty() || csv.back() == '\n' ? "" : ",") + csvField(h); };
   for (auto& f : fixed) header(f);
