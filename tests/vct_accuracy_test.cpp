@@ -18,6 +18,8 @@
 //   - the thin-wall leak (builtin:thin_wall): the indirect light in the dark room B (reference:
 //     none) as a fraction of that in the lit room A, isotropic and anisotropic mips, measured and
 //     bounded.
+//   - the same four with directional voxels (vct.voxels=directional / directional_slab), measured
+//     and bounded (docs/techniques/vct.md, Accuracy point 8).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -113,4 +115,82 @@ TEST(VctAccuracy, ThinWallLeakIsotropicVsAnisotropic) {
   // and ceiling of room A are opaque and the wall, edge-on, is diluted (docs/techniques/vct.md).
   EXPECT_LT(fraction[0], 0.03);
   EXPECT_LT(fraction[1], 0.05);
+}
+
+// ---- directional voxels (vct.voxels=directional / directional_slab) -----------------------------
+// The four configurations above with level 0 as 6 directional volumes from the surfaces' normals
+// (docs/techniques/vct.md, Accuracy point 8). Measured, not the issue's targets: the bounds keep
+// the recorded numbers (in the comments) from getting worse.
+namespace {
+const char* const kDirectionalKinds[2] = {"directional", "directional_slab"};
+}  // namespace
+
+TEST(VctAccuracy, DirectionalVoxelsEmptyCornellBoxOneBounceMean) {
+  // Measured: plane −65.3 % (no self-illumination left to make up for the light the cones miss),
+  // slab −32.2 %; isotropic voxels +3.8 % (above).
+  Scene s = cornellWithSpot(false);
+  const double lowest[2] = {0.25, 0.55};
+  for (int k = 0; k < 2; ++k) {
+    test::AccuracyPair p = test::renderAgainstReference(
+        s, "vct", 128, 128, {"vct.resolution=64", "vct.specular=0", std::string("vct.voxels=") + kDirectionalKinds[k]},
+        true, ReferenceMode::OneBounce, true, "cornell_empty_spot_one_bounce_diffuse_128", 512);
+    double mr = meanOf(p.raster), mp = meanOf(p.reference);
+    double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+    std::printf("%s voxels: empty Cornell box, one-bounce indirect, vct 64^3: mean %.5f vs reference %.5f (%+.1f %%), "
+                "SSIM %.4f\n", kDirectionalKinds[k], mr, mp, 100.0 * (mr / mp - 1.0), ssim);
+    EXPECT_GT(mr / mp, lowest[k]) << kDirectionalKinds[k];
+    EXPECT_LT(mr / mp, 1.25) << kDirectionalKinds[k];
+  }
+}
+
+TEST(VctAccuracy, DirectionalVoxelsFullCornellBoxFullImageSsim) {
+  // Measured: plane 0.7845, slab 0.8412 (isotropic voxels 0.789).
+  Scene s = cornellWithSpot(true);
+  const double bound[2] = {0.75, 0.80};
+  for (int k = 0; k < 2; ++k) {
+    test::AccuracyPair p = test::renderAgainstReference(
+        s, "vct", 128, 128, {"vct.resolution=64", "vct.bounces=4", std::string("vct.voxels=") + kDirectionalKinds[k]},
+        false, ReferenceMode::Full, false, "cornell_spot_full_128", 512);
+    double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+    std::printf("%s voxels: Cornell box (blocks), spot light, direct + vct 64^3 (4 bounces) vs full reference: SSIM "
+                "%.4f (bound %.2f; issue target 0.85), mean %.5f vs %.5f\n", kDirectionalKinds[k], ssim, bound[k],
+                meanOf(p.raster), meanOf(p.reference));
+    EXPECT_GE(ssim, bound[k]) << kDirectionalKinds[k];
+  }
+}
+
+TEST(VctAccuracy, DirectionalVoxelsSponzaSmallFullImageSsim) {
+  // Measured: plane 0.6444, slab 0.7214 (isotropic voxels 0.706).
+  std::string why;
+  std::optional<Scene> sponza = test::loadSponza(why);
+  if (!sponza) GTEST_SKIP() << why;
+  const Scene& s = *sponza;
+  const double bound[2] = {0.60, 0.68};
+  for (int k = 0; k < 2; ++k) {
+    test::AccuracyPair p = test::renderAgainstReference(
+        s, "vct", 96, 54, {"vct.resolution=64", "shadow.resolution=1024", std::string("vct.voxels=") + kDirectionalKinds[k]},
+        false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
+    double ssim = metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
+    std::printf("%s voxels: Sponza 96x54, sun, direct + vct 64^3 vs full reference: SSIM %.4f (bound %.2f; issue "
+                "target 0.85), mean %.5f vs %.5f\n", kDirectionalKinds[k], ssim, bound[k], meanOf(p.raster),
+                meanOf(p.reference));
+    EXPECT_GE(ssim, bound[k]) << kDirectionalKinds[k];
+  }
+}
+
+TEST(VctAccuracy, DirectionalVoxelsThinWallLeak) {
+  // Measured: plane 9.0 % (the wall, one-sided where its faces fall in different voxels, is
+  // transparent edge-on: cones leaning over it see it only through their x part), slab 4.7 %
+  // (isotropic voxels with anisotropic mips: 2.4 %, bound 5 %).
+  Scene s = makeThinWallScene();
+  const double bound[2] = {0.11, 0.05};
+  for (int k = 0; k < 2; ++k) {
+    auto [roomB, roomA] = thinWallIndirect(
+        s, {"vct.resolution=64", "vct.specular=0", "vct.mips=anisotropic", std::string("vct.voxels=") + kDirectionalKinds[k]});
+    std::printf("%s voxels: thin wall, 64^3, anisotropic mips: indirect in the lit room A %.5f, leaked into room B "
+                "%.5f (reference 0): %.2f %% of room A (bound %.0f %%)\n", kDirectionalKinds[k], roomA, roomB,
+                100.0 * roomB / roomA, 100.0 * bound[k]);
+    EXPECT_GT(roomA, 0.0);
+    EXPECT_LT(roomB / roomA, bound[k]) << kDirectionalKinds[k];
+  }
 }

@@ -3,7 +3,8 @@
 // double-precision separating-axis test), a closed mesh gives a closed shell, injection of a lit
 // plane, mip levels (isotropic: mean of 8 children conserves Σ premultiplied radiance; anisotropic:
 // front-to-back compositing), cones through an empty grid and into a solid wall, the cone march
-// against a host mirror, bit-identical frames.
+// against a host mirror, bit-identical frames, directional voxels (level 0 and its mips against the
+// host, a lone lit plane that neither lights nor occludes the cones leaving it).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,6 +23,7 @@
 #include "scene/cornell_box.h"
 #include "scene/textures.h"
 #include "test_support.h"
+#include "util/error.h"
 
 using namespace gi;
 
@@ -110,11 +112,13 @@ struct ConeOut {
 };
 
 // sh: read the SH voxels (vct.voxels=sh) instead of the isotropic radiance.
+// Directional voxels when vs was built with them (VoxelScene::directional).
 ConeOut traceCones(VoxelScene& vs, const TraceParams& tp, const std::vector<glm::vec4>& cones,
                    const std::vector<glm::vec4>& dirs, bool sh = false) {
   cl::Context& ctx = test::context();
   cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
-                                      {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"}});
+                                      {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"},
+                                       {"GI_VCT_DIRECTIONAL", vs.directional() ? "1" : "0"}});
   cl::Kernel k = prog.kernel("vct_trace_cones");
   cl::Buffer c = ctx.upload(cones, "cones"), d = ctx.upload(dirs, "dirs");
   cl::Buffer out(ctx, cones.size() * 16), occ(ctx, cones.size() * 4);
@@ -246,8 +250,11 @@ void randomCones(int n, uint32_t seed, std::vector<glm::vec4>& cones, std::vecto
   }
 }
 
-// Host anisotropic chain from level 0 (the compositing rule of voxel_light.cl's comment).
-std::vector<glm::vec4> hostAnisotropic(const std::vector<glm::vec4>& level0, int N, int levels) {
+// Host anisotropic chain of levels ≥ 1 from level 0 (the compositing rule of voxel_light.cl's
+// comment): from the isotropic level0, or (directional voxels) from level 0's 6 directional volumes
+// of N³ voxels each, in direction order.
+std::vector<glm::vec4> hostAnisotropic(const std::vector<glm::vec4>& level0, int N, int levels,
+                                       const std::vector<glm::vec4>* level0Directional = nullptr) {
   HostMips h;
   h.N = N;
   std::vector<glm::vec4> out;
@@ -255,7 +262,9 @@ std::vector<glm::vec4> hostAnisotropic(const std::vector<glm::vec4>& level0, int
   for (int l = 1; l < levels; ++l) {
     int n = N >> l, nc = 2 * n;
     for (int dir = 0; dir < 6; ++dir) {
-      const glm::vec4* child = l == 1 ? level0.data() : out.data() + h.anisoOffset(l - 1, dir);
+      const glm::vec4* child = l > 1 ? out.data() + h.anisoOffset(l - 1, dir)
+                               : level0Directional ? level0Directional->data() + size_t(dir) * N * N * N
+                                                   : level0.data();
       for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
           for (int x = 0; x < n; ++x) {
@@ -560,6 +569,75 @@ double vctIndirectSum(const Scene& s, std::vector<std::string> sets) {
   return sum;
 }
 
+// An empty shadow-map set, for scenes whose lights have none (shadow_map = -1).
+ShadowMapSet noShadowMaps(cl::Context& ctx) {
+  ShadowMapSet shadows;
+  shadows.viewTable = ctx.upload(std::vector<GiView>{}, "views");
+  shadows.offsetTable = ctx.upload(std::vector<uint32_t>{}, "offsets");
+  shadows.depths = cl::Buffer(ctx, 4);
+  return shadows;
+}
+
+// Directional voxels: accumulator records (voxel_types.h) of one opaque triangle–voxel pair per
+// non-empty voxel of level0, with mean normal normals[v] (shorter than 0.5: a two-sided voxel,
+// VoxelSurface.twoSided) and no offset; what vct_directional_level0 reads through vox_resolve.
+void writeNormals(cl::Context& ctx, VoxelScene& vs, const std::vector<glm::vec4>& level0,
+                  const std::vector<glm::vec3>& normals) {
+  std::vector<uint32_t> acc(vs.voxelCount() * GI_VOX_RECORD, 0u);
+  for (size_t v = 0; v < level0.size(); ++v) {
+    if (level0[v] == glm::vec4(0.0f)) continue;
+    uint32_t* r = &acc[v * GI_VOX_RECORD];
+    r[GI_VOX_OPACITY] = uint32_t(GI_VOX_UNIT);
+    r[GI_VOX_COUNT] = 1;
+    for (int k = 0; k < 3; ++k) {
+      r[GI_VOX_ALBEDO + k] = uint32_t(0.5f * GI_VOX_UNIT);
+      r[GI_VOX_NORMAL + k] = uint32_t(int32_t(std::lround(normals[v][k] * GI_VOX_UNIT / 4)) + int32_t(GI_VOX_SIGNED_BIAS));
+      r[GI_VOX_OFFSET + k] = GI_VOX_SIGNED_BIAS;
+    }
+  }
+  ctx.write(vs.accumulators(), acc.data(), acc.size() * 4);
+}
+
+// The mean normal as vox_resolve reads it back from writeNormals' fixed-point records.
+glm::vec3 storedNormal(glm::vec3 n) {
+  return glm::vec3(std::lround(n.x * GI_VOX_UNIT / 4), std::lround(n.y * GI_VOX_UNIT / 4),
+                   std::lround(n.z * GI_VOX_UNIT / 4)) * (4.0f / GI_VOX_UNIT);
+}
+
+// Random unit normals for the non-empty voxels of level0: every 7th axis-aligned, every 5th
+// shortened to length 0.3 (two-sided).
+std::vector<glm::vec3> randomNormals(const std::vector<glm::vec4>& level0, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+  std::vector<glm::vec3> normals(level0.size(), glm::vec3(0.0f));
+  for (size_t v = 0, k = 0; v < level0.size(); ++v) {
+    if (level0[v] == glm::vec4(0.0f)) continue;
+    glm::vec3 n = glm::normalize(glm::vec3(U(rng), U(rng), U(rng)) + glm::vec3(1e-3f));
+    if (k % 7 == 3) {
+      n = glm::vec3(0.0f);
+      n[k % 3] = k % 2 ? 1.0f : -1.0f;
+    }
+    if (k % 5 == 0) n *= 0.3f;
+    normals[v] = n;
+    ++k;
+  }
+  return normals;
+}
+
+// What a cone travelling along axis direction dir (+x, −x, +y, −y, +z, −z) sees of a level-0 voxel
+// with mean normal meanN, from voxel_grid.h's definition: the projected coverage |n·e| / max_i |n_i|
+// of a plane facing the cone (n·e < 0), nothing of one facing away, all of a two-sided voxel.
+// A slab (vct.voxels=directional_slab): opaque from every side but to a cone leaving through the
+// front, by the same projected coverage: 1 − that of the plane seen from behind.
+float hostCoverage(glm::vec3 meanN, int dir, bool slab) {
+  if (glm::length(meanN) < 0.5f) return 1.0f;
+  glm::vec3 n = glm::normalize(meanN), e(0.0f);
+  e[dir / 2] = dir % 2 ? -1.0f : 1.0f;
+  float dominant = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
+  float front = std::clamp(-glm::dot(n, e) / dominant, 0.0f, 1.0f), back = std::clamp(glm::dot(n, e) / dominant, 0.0f, 1.0f);
+  return slab ? 1.0f - back : front;
+}
+
 }  // namespace
 
 TEST(VctInject, LitPlaneGetsAlbedoOverPiTimesIrradiance) {
@@ -571,10 +649,7 @@ TEST(VctInject, LitPlaneGetsAlbedoOverPiTimesIrradiance) {
   s.bounds.extend(glm::vec3(0, -1, 0));
   cl::Context& ctx = test::context();
   DeviceScene ds(ctx, s);
-  ShadowMapSet shadows;
-  shadows.viewTable = ctx.upload(std::vector<GiView>{}, "views");
-  shadows.offsetTable = ctx.upload(std::vector<uint32_t>{}, "offsets");
-  shadows.depths = cl::Buffer(ctx, 4);
+  ShadowMapSet shadows = noShadowMaps(ctx);
   VoxelScene vs(ctx, s, 32);
   vs.voxelize(ds);
   vs.inject(ds, shadows);
@@ -605,10 +680,7 @@ TEST(VctVoxelize, RevoxelizingClearsWhatThePreviousSceneTouched) {
   for (glm::vec3& p : first.positions) p.y += 0.4f * p.x;  // tilted: other voxels than the second plane's
   cl::Context& ctx = test::context();
   DeviceScene dsFirst(ctx, first), dsSecond(ctx, second);
-  ShadowMapSet shadows;
-  shadows.viewTable = ctx.upload(std::vector<GiView>{}, "views");
-  shadows.offsetTable = ctx.upload(std::vector<uint32_t>{}, "offsets");
-  shadows.depths = cl::Buffer(ctx, 4);
+  ShadowMapSet shadows = noShadowMaps(ctx);
   VoxelScene reused(ctx, second, 32), fresh(ctx, second, 32);
   reused.voxelize(dsFirst);
   reused.inject(dsFirst, shadows);
@@ -871,7 +943,11 @@ TEST(Vct, FramesAreBitIdentical) {
   o.spotLight = CornellSpotLight{};
   Scene s = makeCornellBox(o);
   const std::vector<std::vector<std::string>> modes = {
-      {"vct.mips=isotropic"}, {"vct.mips=anisotropic"}, {"vct.mips=anisotropic", "vct.voxels=sh"}};
+      {"vct.mips=isotropic"},
+      {"vct.mips=anisotropic"},
+      {"vct.mips=anisotropic", "vct.voxels=sh"},
+      {"vct.mips=anisotropic", "vct.voxels=directional"},
+      {"vct.mips=anisotropic", "vct.voxels=directional_slab"}};
   for (const std::vector<std::string>& mode : modes) {
     std::vector<std::vector<float>> images;
     for (int run = 0; run < 2; ++run) {
@@ -971,10 +1047,7 @@ TEST(VctShVoxels, ProjectionIsTheLobeOfTheVoxelSurface) {
   s.lights.push_back(sun);
   cl::Context& ctx = test::context();
   DeviceScene ds(ctx, s);
-  ShadowMapSet shadows;
-  shadows.viewTable = ctx.upload(std::vector<GiView>{}, "views");
-  shadows.offsetTable = ctx.upload(std::vector<uint32_t>{}, "offsets");
-  shadows.depths = cl::Buffer(ctx, 4);
+  ShadowMapSet shadows = noShadowMaps(ctx);
   VoxelScene vs(ctx, s, 32);
   vs.voxelize(ds);
   vs.inject(ds, shadows);
@@ -1171,7 +1244,7 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
   // output L = ρ/π·E is E.
   cl::Context& ctx = test::context();
   Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
-  VoxelScene vs(ctx, s, 32);
+  VoxelScene vs(ctx, s, 32), vsDirectional(ctx, s, 32, VoxelScene::Directional::Plane);
   const GiVoxelGrid& g = vs.grid();
   std::vector<glm::vec4> level0 = randomLevel0(vs.voxelCount(), 21);
   for (auto& v : level0) v *= 0.3f;
@@ -1180,6 +1253,8 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
   ctx.fill(vs.accumulators(), 0u);
   vs.projectSh(ShLobe::Hemisphere);
   ctx.write(vs.sh(), shLevel0.data(), shLevel0.size() * 16);
+  writeLevel0(ctx, vsDirectional, level0);
+  writeNormals(ctx, vsDirectional, level0, randomNormals(level0, 24));
   const int W = 37, H = 5, count = W * H;
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
@@ -1194,17 +1269,21 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
   cl::Buffer lanesOut(ctx, count * 16), scalarOut(ctx, count * 16);
   // The device's lane count, and 1 (the GPU code path).
   for (int lanes : {cl::gatherVectorWidth(ctx), 1}) {
-    for (int sh = 0; sh < 2; ++sh) {
+    // Voxel kinds: 0 isotropic, 1 SH, 2 directional (anisotropic mips only).
+    for (int kind = 0; kind < 3; ++kind) {
+      int sh = kind == 1, directional = kind == 2;
+      VoxelScene& v = directional ? vsDirectional : vs;
       cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
                                           {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"},
+                                           {"GI_VCT_DIRECTIONAL", directional ? "1" : "0"},
                                            {"GI_VW", std::to_string(lanes)}});
       cl::Kernel diffuse = prog.kernel("vct_diffuse"), points = prog.kernel("vct_irradiance_points");
-      for (int an = 0; an < 2; ++an) {
-        vs.buildMips(an);
-        if (sh) vs.buildShMips(an);
-        const cl::Buffer& aniso = an ? vs.aniso() : vs.iso();
-        const cl::Buffer& shIso = sh ? vs.sh() : vs.iso();
-        const cl::Buffer& shAniso = sh && an ? vs.shAniso() : shIso;
+      for (int an = directional; an < 2; ++an) {
+        v.buildMips(an);
+        if (sh) v.buildShMips(an);
+        const cl::Buffer& aniso = an ? v.aniso() : v.iso();
+        const cl::Buffer& shIso = sh ? v.sh() : v.iso();
+        const cl::Buffer& shAniso = sh && an ? v.shAniso() : shIso;
         for (int variant = 0; variant < 3; ++variant) {
           TraceParams tp;
           tp.startOffset = 1.0f;
@@ -1214,11 +1293,11 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
           tp.levelSteps = variant == 2;        // variant 2: the level-aligned march and AO
           tp.applyAo = variant > 0;
           tp.aoLambda = 0.1f;
-          diffuse.args(g, tp, vs.iso(), aniso, shIso, shAniso, W, H, W, H, bPos, bNrm, bAlb, lanesOut);
+          diffuse.args(g, tp, v.iso(), aniso, shIso, shAniso, W, H, W, H, bPos, bNrm, bAlb, lanesOut);
           int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
           ctx.launch(diffuse, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8),
                                               cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
-          points.args(g, tp, vs.iso(), aniso, shIso, shAniso, bPos, bNrm, count, scalarOut);
+          points.args(g, tp, v.iso(), aniso, shIso, shAniso, bPos, bNrm, count, scalarOut);
           ctx.launch(points, cl::NDRange::d1(cl::roundUp(count, 64), 64));
           std::vector<glm::vec4> got = ctx.download<glm::vec4>(lanesOut), ref = ctx.download<glm::vec4>(scalarOut);
           ctx.profiler().discard();
@@ -1231,7 +1310,8 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
             }
           }
           std::printf("diffuse cones, %d lanes vs one cone at a time (%s voxels, %s mips, %s): max abs difference %.2e "
-                      "(largest %.3f)\n", lanes, sh ? "SH" : "isotropic", an ? "anisotropic" : "isotropic",
+                      "(largest %.3f)\n", lanes, sh ? "SH" : directional ? "directional" : "isotropic",
+                      an ? "anisotropic" : "isotropic",
                       variant == 0 ? "continuous march" : variant == 1 ? "footprint in front + AO" : "level steps + AO",
                       worst, largest);
           EXPECT_GT(largest, 0.05f);
@@ -1410,4 +1490,139 @@ TEST(VctMips, EmptySpaceMapMatchesHost) {
     EXPECT_GT(empty, cells / 2);
     EXPECT_EQ(mismatches, 0u);
   }
+}
+
+// ---- directional voxels (vct.voxels=directional) -----------------------------------------------
+
+TEST(VctDirectionalVoxels, Level0AndMipsMatchHost) {
+  // vct_directional_level0 and the anisotropic mips built on it against the host: volume dir of
+  // level 0 = the isotropic (L·α, α) × the coverage of the voxel's mean normal seen along dir
+  // (hostCoverage: plane and slab), every level above composited front to back per direction
+  // (hostAnisotropic). Random sparse level 0 and normals (some axis-aligned, some two-sided).
+  cl::Context& ctx = test::context();
+  Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
+  for (bool slab : {false, true}) {
+    VoxelScene vs(ctx, s, 32, slab ? VoxelScene::Directional::Slab : VoxelScene::Directional::Plane);
+    int N = 32, levels = vs.grid().levels;
+    size_t n3 = vs.voxelCount();
+    std::vector<glm::vec4> level0 = randomLevel0(n3, 31);
+    std::vector<glm::vec3> normals = randomNormals(level0, 32);
+    writeLevel0(ctx, vs, level0);
+    writeNormals(ctx, vs, level0, normals);
+    vs.buildMips(true);
+    std::vector<glm::vec4> aniso = ctx.download<glm::vec4>(vs.aniso());
+    ctx.profiler().discard();
+    std::vector<glm::vec4> host(6 * n3, glm::vec4(0.0f));
+    size_t seen = 0, hidden = 0, partly = 0;
+    for (int dir = 0; dir < 6; ++dir)
+      for (size_t v = 0; v < n3; ++v) {
+        if (level0[v] == glm::vec4(0.0f)) continue;
+        float k = hostCoverage(storedNormal(normals[v]), dir, slab);
+        host[dir * n3 + v] = k * level0[v];
+        (k == 1.0f ? seen : k == 0.0f ? hidden : partly)++;
+      }
+    std::vector<glm::vec4> above = hostAnisotropic(level0, N, levels, &host);
+    host.insert(host.end(), above.begin(), above.end());
+    ASSERT_EQ(aniso.size(), host.size() + VoxelScene::kChainEndRecords);
+    EXPECT_EQ(aniso.back(), glm::vec4(0.0f));  // the chain's end record
+    float worst0 = 0, worst = 0;
+    for (size_t i = 0; i < host.size(); ++i) {
+      float& w = i < 6 * n3 ? worst0 : worst;
+      for (int c = 0; c < 4; ++c) w = std::max(w, std::abs(aniso[i][c] - host[i][c]));
+    }
+    std::printf("directional level 0 (%s: %zu voxel-directions seen whole, %zu hidden, %zu partly): max abs "
+                "difference %.2e; levels >= 1: %.2e\n", slab ? "slab" : "plane", seen, hidden, partly, worst0, worst);
+    EXPECT_GT(hidden, 1000u);
+    EXPECT_GT(partly, 1000u);
+    EXPECT_LT(worst0, 1e-6f);
+    EXPECT_LT(worst, 1e-6f);
+  }
+}
+
+TEST(VctDirectionalVoxels, LitPlaneNeitherLightsNorOccludesConesLeavingIt) {
+  // A lone sunlit plane facing up (+y), voxelized and injected (L = ρ/π·E). Cones that leave it
+  // (from its surface, upwards) must gather nothing from it and not be occluded by it: nothing
+  // else is in the scene, so radiance and opacity are exactly 0. Cones arriving at its front from
+  // above must be blocked by it and see its radiance. Isotropic voxels for contrast: the leaving
+  // cones are occluded and lit by the plane's own voxels. Then the whole technique: the plane
+  // gathers no indirect light from itself (the path tracer's answer: none).
+  const float y = 0.13f;
+  Scene s = sunlitPlane(glm::vec3(0.8f), y, glm::vec3(0, -1, 0), glm::vec3(3.0f));
+  s.bounds.extend(glm::vec3(0, 1, 0));
+  s.bounds.extend(glm::vec3(0, -1, 0));
+  cl::Context& ctx = test::context();
+  DeviceScene ds(ctx, s);
+  ShadowMapSet shadows = noShadowMaps(ctx);
+  const float L = 0.8f / float(M_PI) * 3.0f;
+  const float tan60 = std::tan(float(M_PI) / 6);  // the diffuse cones' half-angle
+  float isotropicArriving = 0;  // opacity of the cone arriving along −n, isotropic voxels
+  for (bool directional : {false, true}) {
+    VoxelScene vs(ctx, s, 32, directional ? VoxelScene::Directional::Plane : VoxelScene::Directional::Off);
+    vs.voxelize(ds);
+    vs.inject(ds, shadows);
+    vs.buildMips(true);
+    const GiVoxelGrid& g = vs.grid();
+    float surface = (y - g.origin[1]) / g.voxel_size;  // the plane's height in voxels
+    // Leaving: from the surface at the grid's centre, along the normal and at 30°, 60° and 80°
+    // from it, narrow and 60° cones. Arriving: from 10 voxels above, down along −n and at 30° and
+    // 45° from it, narrow.
+    std::vector<glm::vec4> cones, dirs;
+    for (float tanHalf : {0.05f, tan60})
+      for (float deg : {0.0f, 30.0f, 60.0f, 80.0f}) {
+        float a = glm::radians(deg);
+        cones.emplace_back(16.0f, surface, 16.0f, tanHalf);
+        dirs.emplace_back(std::sin(a) * 0.6f, std::cos(a), std::sin(a) * 0.8f, 64.0f);
+      }
+    size_t leaving = cones.size();
+    for (float deg : {0.0f, 30.0f, 45.0f}) {
+      float a = glm::radians(deg);
+      cones.emplace_back(16.0f, surface + 10.0f, 16.0f, 0.05f);
+      dirs.emplace_back(std::sin(a), -std::cos(a), 0.0f, 64.0f);
+    }
+    TraceParams tp;
+    tp.anisotropic = 1;
+    ConeOut out = traceCones(vs, tp, cones, dirs);
+    float leftOpacity = 0, leftRadiance = 0;
+    for (size_t i = 0; i < leaving; ++i) {
+      leftOpacity = std::max(leftOpacity, out.radiance[i].w);
+      leftRadiance = std::max(leftRadiance, out.radiance[i].x);
+    }
+    std::printf("lit plane, %s voxels: cones leaving it: largest opacity %.4f, radiance %.4f (L = %.4f); arriving "
+                "at 0/30/45 deg from the normal: opacity %.4f / %.4f / %.4f, radiance / opacity %.4f / %.4f / %.4f\n",
+                directional ? "directional" : "isotropic", leftOpacity, leftRadiance, L, out.radiance[leaving].w,
+                out.radiance[leaving + 1].w, out.radiance[leaving + 2].w, out.radiance[leaving].x / out.radiance[leaving].w,
+                out.radiance[leaving + 1].x / out.radiance[leaving + 1].w,
+                out.radiance[leaving + 2].x / out.radiance[leaving + 2].w);
+    if (directional) {
+      EXPECT_EQ(leftOpacity, 0.0f);
+      EXPECT_EQ(leftRadiance, 0.0f);
+    } else {
+      EXPECT_GT(leftOpacity, 0.3f);
+      EXPECT_GT(leftRadiance, 0.1f * L);
+    }
+    // Arriving along −n: the one-voxel plane occludes as much as it does as isotropic voxels (not
+    // fully: the half-voxel steps' trilinear samples blend it with the empty voxels around it);
+    // obliquely, the −y volume weighs cos² of the angle, the edge-on ±x volumes see nothing.
+    if (directional)
+      EXPECT_NEAR(out.radiance[leaving].w, isotropicArriving, 1e-6f);
+    else
+      isotropicArriving = out.radiance[leaving].w;
+    EXPECT_GT(out.radiance[leaving].w, 0.85f);
+    for (size_t i = leaving; i < cones.size(); ++i) {
+      EXPECT_GT(out.radiance[i].w, 0.5f) << "arriving cone " << i - leaving;
+      EXPECT_NEAR(out.radiance[i].x / out.radiance[i].w, L, 1e-3f * L) << "arriving cone " << i - leaving;
+    }
+  }
+  double isotropic = vctIndirectSum(lonePlaneSeenFromAbove(), {"vct.resolution=32", "vct.specular=0"});
+  double directional =
+      vctIndirectSum(lonePlaneSeenFromAbove(), {"vct.resolution=32", "vct.specular=0", "vct.voxels=directional"});
+  std::printf("lit plane, indirect light on itself (image sum): isotropic voxels %.4f, directional %.6f\n", isotropic,
+              directional);
+  EXPECT_GT(isotropic, 1.0);
+  EXPECT_EQ(directional, 0.0);
+}
+
+TEST(VctDirectionalVoxels, NeedAnisotropicMips) {
+  Scene s = lonePlaneSeenFromAbove();
+  EXPECT_THROW(vctIndirectSum(s, {"vct.resolution=32", "vct.voxels=directional", "vct.mips=isotropic"}), Error);
 }

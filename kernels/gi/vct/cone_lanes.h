@@ -324,11 +324,11 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
   intV n3 = (intV)(1) << n3Shift;
   // Light arriving at the apex travels along −d: the SH basis at −d.
   floatV Y0 = (floatV)(GI_SH_Y0), Y1y = -GI_SH_Y1 * d.y, Y1z = -GI_SH_Y1 * d.z, Y1x = -GI_SH_Y1 * d.x;
-  intV isoLanes = level == 0;
+  intV isoLanes = level < GI_VCT_FIRST_DIRECTIONAL_LEVEL;
   if (!m.anisotropic) isoLanes = (intV)(-1);
   // Lanes masked out of a volume (weight 0) read its first voxels only (n = 1, base 0): the
   // isotropic levels ≥ 1 are not built with anisotropic mips, and level 0 has no directional
-  // volumes; unwritten memory could hold NaN, and NaN·0 is NaN.
+  // volumes unless GI_VCT_DIRECTIONAL; unwritten memory could hold NaN, and NaN·0 is NaN.
   if (GI_ANY(isoLanes))
     vox_trilinear_lanes(m.iso, m.sh, GI_SEL((intV)(0), offset, isoLanes), GI_SEL((intV)(0), shift, isoLanes), p, scale,
                         GI_SEL((floatV)(0.0f), weight, isoLanes), Y0, Y1y, Y1z, Y1x, acc);
@@ -338,7 +338,7 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
   // Directional volume 2·axis (+) or 2·axis + 1 (−) of the level (vox_aniso_offset), per axis.
   intV base[3];
   for (int axis = 0; axis < 3; ++axis)
-    base[axis] = GI_SEL(6 * (offset - N3) + (2 * axis + GI_SEL((intV)(1), (intV)(0), da[axis] >= 0.0f)) * n3,
+    base[axis] = GI_SEL(6 * (offset - GI_VCT_FIRST_DIRECTIONAL_LEVEL * N3) + (2 * axis + GI_SEL((intV)(1), (intV)(0), da[axis] >= 0.0f)) * n3,
                         (intV)(0), isoLanes);
 #if GI_VCT_SH
   for (int axis = 0; axis < 3; ++axis)
@@ -363,12 +363,12 @@ __attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelM
 #if GI_VCT_SH
   vox_level_sample_lanes(m, (intV)(level), p, d, (floatV)(1.0f), acc);
 #else
-  int directional = m.anisotropic && level > 0;
+  int directional = m.anisotropic && level >= GI_VCT_FIRST_DIRECTIONAL_LEVEL;
   int shift = (31 - clz(m.N)) - level, n = 1 << shift;
   float scale = as_float((uint)(127 - level) << 23);  // 2^−level
   int n3 = 1 << (3 * shift), N3 = m.N * m.N * m.N;
   int offset = (0x09249249 & ((1 << (3 * level)) - 1)) << (3 * shift + 3);  // vox_level_sample_lanes
-  int level6 = 6 * (offset - N3);
+  int level6 = 6 * (offset - GI_VCT_FIRST_DIRECTIONAL_LEVEL * N3);  // vox_aniso_offset
   // The volumes read, in float-element offsets: the isotropic level (bx only, weight 1), or the
   // directional volume 2·axis (+) or 2·axis + 1 (−) of each axis facing d, weights d_axis².
   global const float* chain = directional ? m.aniso : m.iso;

@@ -1,7 +1,8 @@
 // The cone-traced passes of `vct` (ALGORITHMS.md §5; cone.h for the march and the cone sets).
 // Build defines: GI_VCT_CONES (6 or 9), GI_DOWN (diffuse tracing every GI_DOWN-th pixel), GI_VW
 // (pixels per work-item of vct_diffuse and vct_specular, common/vector_width.h), GI_VCT_SH
-// (1: SH voxels, read from `sh` / `shAniso`; voxel_grid.h).
+// (1: SH voxels, read from `sh` / `shAniso`; voxel_grid.h), GI_VCT_DIRECTIONAL (1: directional
+// voxels, level 0 read from `aniso` too; voxel_grid.h).
 // Every kernel takes the four mip chains iso, aniso, sh, shAniso (voxel_grid.h); the unread ones may
 // be any buffer.
 //

@@ -4,7 +4,10 @@
 //   `iso`  : the isotropic chain, level 0 (N³) then level 1 ((N/2)³) … down to 1³, consecutive;
 //   `aniso`: levels 1 … levels−1, each as 6 directional volumes (+x, −x, +y, −y, +z, −z), where
 //            volume "+x" is what a cone travelling along +x sees: the children composited front
-//            to back in increasing x. Level 0 is shared with `iso` (a voxel is isotropic).
+//            to back in increasing x. Level 0 is shared with `iso` (a voxel is isotropic), except
+//            with directional voxels (GI_VCT_DIRECTIONAL = 1, vct.voxels=directional): then
+//            `aniso` starts with 6 directional volumes of level 0 (vox_directional_coverage),
+//            and every level of the chain a cone reads is directional.
 //   SH voxels (vct.voxels=sh): the same two layouts with 3 float4 per voxel (VoxelMips below).
 // Voxels outside the grid are empty (zero).
 #pragma once
@@ -27,10 +30,42 @@ inline size_t vox_level_offset(int N, int level) {
   return 8 * (N3 - n * n * n) / 7;
 }
 
-// First voxel of directional volume `dir` (0..5) of level `level` ≥ 1 in `aniso`.
+#ifndef GI_VCT_DIRECTIONAL
+#define GI_VCT_DIRECTIONAL 0
+#endif
+// The first level with directional volumes in `aniso`: 1, or 0 with directional voxels.
+#define GI_VCT_FIRST_DIRECTIONAL_LEVEL (GI_VCT_DIRECTIONAL ? 0 : 1)
+
+// First voxel of directional volume `dir` (0..5) of level `level` ≥ GI_VCT_FIRST_DIRECTIONAL_LEVEL
+// in `aniso` (vox_level_offset(N, 1) = N³).
 inline size_t vox_aniso_offset(int N, int level, int dir) {
   size_t n = (size_t)(N >> level);
-  return 6 * (vox_level_offset(N, level) - (size_t)N * N * N) + (size_t)dir * n * n * n;
+  return 6 * (vox_level_offset(N, level) - vox_level_offset(N, GI_VCT_FIRST_DIRECTIONAL_LEVEL)) +
+         (size_t)dir * n * n * n;
+}
+
+// Directional voxels (vct.voxels=directional / directional_slab): the fraction of a level-0
+// voxel's premultiplied radiance and opacity (L·α, α) that a cone travelling along axis direction
+// `dir` (0..5 = +x, −x, +y, −y, +z, −z) sees, for a voxel whose surface has unit mean normal n.
+// facing = −n·e / max_i |n_i|: 1 where the surface's front faces the cone head-on along its
+// dominant axis, 0 edge-on, −1 where the cone leaves straight through the front (it started on or
+// behind the surface).
+//   plane (slab = 0): the voxel holds a thin plane; it covers |n·e| / max_i |n_i| of the voxel's
+//     cross-section seen along e (1 along its dominant axis, 0 edge-on), and only its front is
+//     seen: coverage clamp(facing, 0, 1). A cone entering the front is blocked and sees the
+//     surface's radiance (which leaves the surface on its front side only); a cone leaving through
+//     the front, or along the plane, passes.
+//   slab (slab = 1): the voxel is the one-voxel slab of the conservative voxelization, opaque and
+//     lit from every side as an isotropic voxel, except that the cone leaving through its front
+//     passes: coverage clamp(1 + facing, 0, 1) (0 for a cone leaving along the dominant axis).
+// Voxels whose normals cancel (two-sided thin geometry, VoxelSurface.twoSided) are seen whole from
+// every direction (coverage 1), as isotropic voxels are.
+inline float vox_directional_coverage(float3 n, int twoSided, int slab, int dir) {
+  if (twoSided) return 1.0f;
+  float axisN = dir < 2 ? n.x : (dir < 4 ? n.y : n.z);
+  float dominant = fmax(fabs(n.x), fmax(fabs(n.y), fabs(n.z)));
+  float facing = ((dir & 1) ? axisN : -axisN) / dominant;
+  return clamp(slab ? 1.0f + facing : facing, 0.0f, 1.0f);
 }
 
 // The mip chains a cone reads, gathered into one value for the march (built by the kernels).
@@ -96,7 +131,7 @@ inline float4 vox_trilinear_sh(global const float4* alphaVol, global const float
 inline float4 vox_volume_sample(VoxelMips m, int level, int dir, float3 p, float3 d) {
   int n = m.N >> level;
   float scale = 1.0f / (float)(1 << level);
-  bool iso = !m.anisotropic || level == 0;
+  bool iso = !m.anisotropic || level < GI_VCT_FIRST_DIRECTIONAL_LEVEL;
   size_t off = iso ? vox_level_offset(m.N, level) : vox_aniso_offset(m.N, level, dir);
 #if GI_VCT_SH
   // The light arriving at the cone's apex travels along −d.
@@ -109,7 +144,7 @@ inline float4 vox_volume_sample(VoxelMips m, int level, int dir, float3 p, float
 // One level of the chain seen along unit direction d: the isotropic volume, or (anisotropic,
 // level ≥ 1) the three directional volumes facing d weighted by d² per axis.
 inline float4 vox_level_sample(VoxelMips m, int level, float3 p, float3 d) {
-  if (!m.anisotropic || level == 0) return vox_volume_sample(m, level, 0, p, d);
+  if (!m.anisotropic || level < GI_VCT_FIRST_DIRECTIONAL_LEVEL) return vox_volume_sample(m, level, 0, p, d);
   float3 w = d * d;
   return w.x * vox_volume_sample(m, level, d.x >= 0.0f ? 0 : 1, p, d) +
          w.y * vox_volume_sample(m, level, d.y >= 0.0f ? 2 : 3, p, d) +

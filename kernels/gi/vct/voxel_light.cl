@@ -9,6 +9,9 @@
 //   centre lies up to √3/2 voxel behind the surface, where the shadow map sees it occluded by the
 //   surface it belongs to. Voxels whose normals cancel (|mean n| < 0.5: both sides of thin
 //   geometry) are lit from both sides (|n·ω|). Output: level 0, (L·α, α).
+// vct_directional_level0 (directional voxels, vct.voxels=directional / directional_slab): the 6
+//   directional volumes of level 0 in `aniso`, per voxel the isotropic (L·α, α) times
+//   vox_directional_coverage of its mean normal (slab: 1 for directional_slab); vct_mip_anisotropic then builds level 1 from them as it builds the levels above.
 // vct_mip_isotropic: parent = mean of its 8 children (premultiplied, so this conserves Σ L·α).
 // vct_mip_anisotropic_first (level 1) / vct_mip_anisotropic (levels ≥ 2): per parent and direction,
 //   the 2 children along the axis composited front to back (c = c_f + (1 − α_f)·c_b,
@@ -300,8 +303,30 @@ kernel void vct_mip_anisotropic_first(int N, global const float4* iso, global fl
   for (int dir = 0; dir < 6; ++dir) aniso[vox_aniso_offset(N, 1, dir) + v] = vox_aniso_parent(dir, ch);
 }
 
-// Parent voxels of `level` (≥ 2), all 6 directions, each from the matching directional volume of
-// level − 1; one work-item per parent (the direction a compile-time constant in each unrolled step).
+// Directional voxels (GI_VCT_DIRECTIONAL = 1): level 0's 6 directional volumes from the isotropic
+// level 0 and the voxels' mean normals, over the whole grid (voxels whose occupancy bit is clear
+// are zero in `iso`, buildMips' contract, and written as zero here, so that nothing is left of an
+// earlier voxelization; so are voxels every triangle of which an alpha cut-out removed, α = 0).
+kernel void vct_directional_level0(GiVoxelGrid grid, global const uint* occupancy, global const uint* acc,
+                                   global const float4* iso, int slab, global float4* aniso) {
+  int N = grid.resolution;
+  size_t v = get_global_id(0);
+  if (v >= (size_t)N * N * N) return;
+  float4 c = (float4)(0.0f);
+  float coverage[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+  if (((occupancy[v >> 5] >> (v & 31)) & 1u) && acc[v * GI_VOX_RECORD + GI_VOX_OPACITY] != 0u) {
+    VoxelSurface s = vox_resolve(grid, acc, v);
+    c = iso[v];
+#pragma unroll
+    for (int dir = 0; dir < 6; ++dir) coverage[dir] = vox_directional_coverage(s.normal, s.twoSided, slab, dir);
+  }
+#pragma unroll
+  for (int dir = 0; dir < 6; ++dir) aniso[vox_aniso_offset(N, 0, dir) + v] = coverage[dir] * c;
+}
+
+// Parent voxels of `level` (≥ 2, or ≥ 1 with directional voxels), all 6 directions, each from the
+// matching directional volume of level − 1; one work-item per parent (the direction a
+// compile-time constant in each unrolled step).
 kernel void vct_mip_anisotropic(int N, int level, global float4* aniso) {
   int n = N >> level;
   size_t v = get_global_id(0);

@@ -10,10 +10,17 @@
 #include "cl/gather_width.h"
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/vct/voxel_scene.h"
+#include "util/error.h"
 
 namespace gi {
 
 namespace {
+
+VoxelScene::Directional directionalVoxels(const ParamSet& p) {
+  const std::string& v = p.getChoice("vct.voxels");
+  return v == "directional" ? VoxelScene::Directional::Plane
+                            : v == "directional_slab" ? VoxelScene::Directional::Slab : VoxelScene::Directional::Off;
+}
 
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
 struct VctTraceParams {
@@ -28,7 +35,7 @@ public:
 
   void setup(const FrameResources& f) override {
     int res = f.params.getInt("vct.resolution");
-    voxels_ = std::make_unique<VoxelScene>(f.ctx, f.scene, res);
+    voxels_ = std::make_unique<VoxelScene>(f.ctx, f.scene, res, directionalVoxels(f.params));
     voxelized_ = emptySpaceBuilt_ = false;
     upsampler_ = std::make_unique<GeometryAwareUpsampler>(f.ctx, "vct: upsample");
   }
@@ -39,12 +46,22 @@ public:
     int cones = std::stoi(p.getChoice("vct.cones"));
     int down = p.getInt("vct.downsample");
     bool sh = p.getChoice("vct.voxels") == "sh";
+    VoxelScene::Directional kind = directionalVoxels(p);
+    bool directional = kind != VoxelScene::Directional::Off;
+    if (directional && !anisotropic)
+      throw Error("vct.voxels=" + p.getChoice("vct.voxels") +
+                  " needs vct.mips=anisotropic (the directional volumes are anisotropic mips)");
+    if (kind != voxels_->directionalKind()) {  // parameters changed since setup
+      voxels_ = std::make_unique<VoxelScene>(f.ctx, f.scene, voxels_->resolution(), kind);
+      voxelized_ = false;
+    }
     ShLobe lobe = p.getChoice("vct.sh_lobe") == "cosine" ? ShLobe::Cosine : ShLobe::Hemisphere;
-    if (cones != cones_ || down != down_ || sh != sh_) {
+    if (cones != cones_ || down != down_ || sh != sh_ || directional != directional_) {
       program_ = f.ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
                                     cl::withGatherWidth(f.ctx, {{"GI_VCT_CONES", std::to_string(cones)},
                                                                 {"GI_DOWN", std::to_string(down)},
-                                                                {"GI_VCT_SH", sh ? "1" : "0"}}));
+                                                                {"GI_VCT_SH", sh ? "1" : "0"},
+                                                                {"GI_VCT_DIRECTIONAL", directional ? "1" : "0"}}));
       lanes_ = cl::gatherVectorWidth(f.ctx);
       diffuse_ = program_.kernel("vct_diffuse");
       specular_ = program_.kernel("vct_specular");
@@ -52,6 +69,7 @@ public:
       cones_ = cones;
       down_ = down;
       sh_ = sh;
+      directional_ = directional;
     }
     const GiVoxelGrid& grid = voxels_->grid();
     float s = grid.voxel_size;
@@ -145,7 +163,7 @@ private:
   cl::Buffer noMap_;               // null: vct_specular without an empty-space map
   cl::Buffer low_, bounced_, direct_;
   int cones_ = 0, down_ = 0, lanes_ = 1;
-  bool sh_ = false, voxelized_ = false;
+  bool sh_ = false, directional_ = false, voxelized_ = false;
 };
 
 }  // namespace
@@ -156,9 +174,13 @@ TechniqueInfo vctTechniqueInfo() {
             p.addInt("vct.resolution", 128, 32, 256, "voxel grid resolution N (N³ cubic voxels over the scene; power of two)");
             p.addChoice("vct.mips", "anisotropic", {"isotropic", "anisotropic"},
                         "mip filtering: isotropic (mean of 8 children) or anisotropic (6 directional volumes)");
-            p.addChoice("vct.voxels", "isotropic", {"isotropic", "sh"},
-                        "voxel radiance: isotropic (one colour per voxel) or l <= 1 spherical harmonics per colour "
-                        "channel (seed 003 §3.4.5), evaluated against each cone's direction");
+            p.addChoice("vct.voxels", "isotropic", {"isotropic", "sh", "directional", "directional_slab"},
+                        "voxel radiance: isotropic (one colour per voxel), l <= 1 spherical harmonics per colour "
+                        "channel (seed 003 §3.4.5), evaluated against each cone's direction, or directional: level 0 "
+                        "as 6 directional volumes from the surface normal, each voxel a thin plane seen only from "
+                        "its front (directional: by projected coverage, transparent edge-on and to cones leaving it) "
+                        "or a slab open only to cones leaving through its front (directional_slab); anisotropic mips "
+                        "only; docs/techniques/vct.md, Accuracy point 8");
             p.addChoice("vct.sh_lobe", "hemisphere", {"hemisphere", "cosine"},
                         "SH voxels: a voxel shows its surface's radiance on its front hemisphere, or (ten Brug) a "
                         "clamped cosine lobe around its normal");

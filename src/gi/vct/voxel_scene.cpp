@@ -35,25 +35,26 @@ GiVoxelGrid fitVoxelGrid(const Bounds& bounds, int resolution) {
   return g;
 }
 
-uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic, bool sh) {
+uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic, bool sh, bool directional) {
   // Accumulator records, the occupied voxel list (4 B per voxel), the occupancy bits and the
   // compaction's span counts.
   uint64_t n = uint64_t(resolution) * resolution * resolution;
   uint64_t bytes = n * (GI_VOX_RECORD + 1) * 4 + n / 8 + n / kOccupancySpanVoxels * 4;
   // Per voxel of a chain: 16 B of radiance and opacity, plus 48 B of SH coefficients.
   uint64_t perVoxel = sh ? 64 : 16;
-  for (int l = 0; (resolution >> l) > 0; ++l) bytes += (n >> (3 * l)) * perVoxel * (anisotropic && l > 0 ? 7 : 1);
+  for (int l = 0; (resolution >> l) > 0; ++l)
+    bytes += (n >> (3 * l)) * perVoxel * (anisotropic && (l > 0 || directional) ? 7 : 1);
   return bytes;
 }
 
 uint64_t VoxelScene::anisoBytes() const {
   uint64_t bytes = 0;
-  for (int l = 1; l < grid_.levels; ++l) bytes += 6 * (voxelCount() >> (3 * l)) * 16;
+  for (int l = directional() ? 0 : 1; l < grid_.levels; ++l) bytes += 6 * (voxelCount() >> (3 * l)) * 16;
   return bytes + kChainEndRecords * 16;
 }
 
-VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
-    : ctx_(ctx), grid_(fitVoxelGrid(scene.bounds, resolution)) {
+VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution, Directional directional)
+    : ctx_(ctx), grid_(fitVoxelGrid(scene.bounds, resolution)), directional_(directional) {
   voxelizeProgram_ = ctx.buildProgram("kernels/gi/vct/voxelize.cl", cl::withGatherWidth(ctx));
   clear_ = voxelizeProgram_.kernel("vct_clear_occupied");
   occupancyCount_ = voxelizeProgram_.kernel("vct_occupancy_count");
@@ -62,13 +63,15 @@ VoxelScene::VoxelScene(cl::Context& ctx, const Scene& scene, int resolution)
   triangleColumns_ = voxelizeProgram_.kernel("vct_triangle_columns");
   voxelize_ = voxelizeProgram_.kernel("vct_voxelize");
   voxelizeTrianglewise_ = voxelizeProgram_.kernel("vct_voxelize_trianglewise");
-  lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl", cl::withGatherWidth(ctx));
+  lightProgram_ = ctx.buildProgram("kernels/gi/vct/voxel_light.cl",
+                                   cl::withGatherWidth(ctx, {{"GI_VCT_DIRECTIONAL", directional != Directional::Off ? "1" : "0"}}));
   injectLanes_ = cl::gatherVectorWidth(ctx);
   inject_ = lightProgram_.kernel("vct_inject");
   mipIso_ = lightProgram_.kernel("vct_mip_isotropic");
   mipIsoFirst_ = lightProgram_.kernel("vct_mip_isotropic_first");
   mipAnisoFirst_ = lightProgram_.kernel("vct_mip_anisotropic_first");
   mipAniso_ = lightProgram_.kernel("vct_mip_anisotropic");
+  if (directional != Directional::Off) directionalLevel0_ = lightProgram_.kernel("vct_directional_level0");
   shProject_ = lightProgram_.kernel("vct_sh_project");
   shMipIso_ = lightProgram_.kernel("vct_mip_sh_isotropic");
   shMipAniso_ = lightProgram_.kernel("vct_mip_sh_anisotropic");
@@ -147,14 +150,20 @@ void VoxelScene::inject(const DeviceScene& scene, const ShadowMapSet& shadows, i
 
 void VoxelScene::buildMips(bool anisotropic) {
   int N = grid_.resolution;
+  if (directional() && !anisotropic)
+    throw Error("vct.voxels=directional(_slab) needs vct.mips=anisotropic (the directional volumes are anisotropic mips)");
   if (anisotropic && !aniso_) {
     ctx_.requireAllocation(anisoBytes(), "vct anisotropic mips (vct.resolution)");
     aniso_ = cl::Buffer(ctx_, anisoBytes(), CL_MEM_READ_WRITE, "vct anisotropic mips");
     ctx_.fill(aniso_, 0.0f);  // the end record stays 0
   }
+  if (directional()) {
+    directionalLevel0_.args(grid_, occupancy_, acc_, iso_, int(directional_ == Directional::Slab), aniso_);
+    ctx_.launch(directionalLevel0_, cl::NDRange::d1(cl::roundUp(voxelCount(), 64), 64), "vct: directional level 0");
+  }
   for (int l = 1; l < grid_.levels; ++l) {
     size_t cells = voxelCount() >> (3 * l);
-    if (anisotropic && l == 1) {
+    if (anisotropic && l == 1 && !directional()) {
       mipAnisoFirst_.args(N, iso_, aniso_);
       ctx_.launch(mipAnisoFirst_, cl::NDRange::d1(cl::roundUp(cells, 64), 64), "vct: mips (anisotropic)");
     } else if (anisotropic) {

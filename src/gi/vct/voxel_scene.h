@@ -5,7 +5,7 @@
 //   VoxelScene vs(ctx, scene, 128);
 //   vs.voxelize(deviceScene);                     // once for static geometry, or every frame
 //   vs.inject(deviceScene, shadowMaps);           // every frame: level 0 radiance
-//   vs.buildMips(anisotropic);                    // levels 1 … log2 N
+//   vs.buildMips(anisotropic);                    // levels 1 … log2 N (directional voxels: and level 0's 6 volumes)
 //   vs.buildShVoxels(anisotropic, ShLobe::Hemisphere);  // optional SH voxels (after buildMips)
 #pragma once
 #include <cstdint>
@@ -29,11 +29,18 @@ enum class ShLobe { Hemisphere, Cosine };
 
 class VoxelScene {
 public:
-  VoxelScene(cl::Context& ctx, const Scene& scene, int resolution);
+  // Directional voxels (vct.voxels=directional / directional_slab; kernels/gi/vct/voxel_grid.h,
+  // vox_directional_coverage): level 0 also has 6 directional volumes, from the voxels' normals,
+  // each voxel seen as a thin plane or as a slab open only to cones leaving through its front;
+  // anisotropic mips only.
+  enum class Directional { Off, Plane, Slab };
+  VoxelScene(cl::Context& ctx, const Scene& scene, int resolution, Directional directional = Directional::Off);
 
   const GiVoxelGrid& grid() const { return grid_; }
   int resolution() const { return grid_.resolution; }
   uint64_t voxelCount() const { return uint64_t(grid_.resolution) * grid_.resolution * grid_.resolution; }
+  bool directional() const { return directional_ != Directional::Off; }
+  Directional directionalKind() const { return directional_; }
 
   // Clears the accumulators and voxelizes every triangle. Clearing zeroes only the voxels of the
   // previous voxelization's occupied list (accumulators and level 0 of iso): level 0 outside that
@@ -48,7 +55,9 @@ public:
   // the occupied list in contiguous runs (vct_inject; fewer items = longer runs, for tests).
   static constexpr int kInjectItemsCpu = 64 * 64;  // 64 groups: both cores busy whatever the count
   void inject(const DeviceScene& scene, const ShadowMapSet& shadows, int cpuItems = kInjectItemsCpu);
-  // Levels 1 … log2 N from level 0: isotropic (`iso`) or 6 directional volumes (`aniso`).
+  // Levels 1 … log2 N from level 0: isotropic (`iso`) or 6 directional volumes (`aniso`). With
+  // directional voxels, first level 0's 6 volumes in `aniso` from `iso` and the voxels' normals
+  // (anisotropic only: isotropic mips are an error).
   // Level 0 must be zero wherever the occupancy bit is clear (as voxelize/inject/clear leave it):
   // the isotropic level 1 skips the children of parents without an occupied child.
   void buildMips(bool anisotropic);
@@ -68,13 +77,13 @@ public:
   const cl::Buffer& accumulators() const { return acc_; }  // GI_VOX_RECORD words per voxel (voxel_types.h)
   cl::Buffer& iso() { return iso_; }      // float4 per voxel, all isotropic levels (voxel_grid.h)
   cl::Buffer& occupancy() { return occupancy_; }  // bit v & 31 of word v >> 5: voxel v voxelized
-  cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (allocated on first use)
+  cl::Buffer& aniso() { return aniso_; }  // float4, 6 volumes per level ≥ 1 (directional: ≥ 0; allocated on first use)
   cl::Buffer& sh() { return sh_; }            // 3 float4 per voxel of iso (allocated on first use)
   cl::Buffer& shAniso() { return shAniso_; }  // 3 float4 per voxel of aniso (allocated on first use)
   uint64_t bytes() const { return acc_.bytes() + occupied_.bytes() + occupancy_.bytes() + spanCounts_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes() + emptySpace_.bytes() + occupiedLevels_.bytes() + triangleSetup_.bytes() + columnStart_.bytes(); }
   // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes)
   // (+ SH coefficients of the chains used).
-  static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false);
+  static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false, bool directional = false);
 
   // Every chain (iso_, aniso_ and their SH copies) ends with this many zero records: the cone march
   // reads the tap pair along x as two adjacent records, which for the last (1-voxel) volume reaches
@@ -86,7 +95,8 @@ private:
   GiVoxelGrid grid_{};
   cl::Program voxelizeProgram_, lightProgram_;
   int injectLanes_ = 1;  // GI_VW of lightProgram_ (occupied voxels per vct_inject block)
-  cl::Kernel clear_, occupancyCount_, scan_, occupancyList_, triangleColumns_, voxelize_, voxelizeTrianglewise_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, shProject_, shMipIso_, shMipAniso_,
+  Directional directional_ = Directional::Off;
+  cl::Kernel clear_, occupancyCount_, scan_, occupancyList_, triangleColumns_, voxelize_, voxelizeTrianglewise_, inject_, mipIso_, mipIsoFirst_, mipAnisoFirst_, mipAniso_, directionalLevel0_, shProject_, shMipIso_, shMipAniso_,
       occupiedFirst_, occupiedLevel_, emptySpaceFirst_, emptySpaceLevel_;
   // occupied_: the voxels the last voxelization touched (count in occupiedCount_), in increasing
   // order, built from their bits in occupancy_ (1 bit per voxel) through per-span counts.
@@ -103,7 +113,8 @@ private:
   // The empty-space map (bytes, levels 0 …) and its scratch: per cell of levels ≥ 1, any voxel occupied.
   cl::Buffer emptySpace_, occupiedLevels_;
 
-  // The 6 directional volumes of levels ≥ 1, float4 each, and the chain's zero end record.
+  // The 6 directional volumes of levels ≥ 1 (directional voxels: ≥ 0), float4 each, and the
+  // chain's zero end record.
   uint64_t anisoBytes() const;
 };
 
