@@ -5,15 +5,14 @@
 //     Asserted: mean indirect radiance within 10 % (measured +4.1 %) and SSIM ≥ 0.95 (measured 0.982).
 //   - Cornell box with its blocks, same spot, full image (direct + probes, multi-bounce) against the
 //     full reference: asserted SSIM ≥ 0.85, the issue's target (measured 0.936).
-//   - Sponza (small, 96×54) with its sun, full image: asserted SSIM ≥ 0.72 (measured 0.775; the
-//     issue's 0.85 is NOT met, docs/results/probes.md). Skipped without media.
+//   - Sponza (small, 96×54) with its sun, full image: asserted SSIM ≥ 0.79 (measured 0.811 with
+//     the default DDGI weighting, margin 0.02; 0.775 with seed 004's eq. 7; the issue's 0.85 is
+//     NOT met at the seed's grid, docs/results/probes.md). Skipped without media.
 // References: the stored converged images (tests/reference_store.h).
 // All use the static full rebuild (probes.update=static), so one frame shows the converged field.
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <algorithm>
-#include <cstdlib>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,39 +65,8 @@ TEST(ProbesAccuracy, SponzaSmallFullImageSsim) {
       s, "probes", 96, 54, {"probes.update=static", "probes.rebuild_updates=8", "probes.rays=128", "shadow.resolution=1024"},
       false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
   double ssim = displaySsim(p, s);
-  std::printf("Sponza 96x54, sun, direct + probes 8x8x4 vs full reference: SSIM %.4f (bound 0.72; issue "
+  std::printf("Sponza 96x54, sun, direct + probes 8x8x4 vs full reference: SSIM %.4f (bound 0.79; issue "
               "target 0.85 not met), mean %.5f vs %.5f\n", ssim,
               meanOf(p.raster), meanOf(p.reference));
-  EXPECT_GE(ssim, 0.72);
-}
-
-// What limits Sponza's SSIM (docs/results/probes.md): a manual measurement, DISABLED_ so ctest skips
-// it. Renders the SponzaSmallFullImageSsim configuration once per ';'-separated group of extra
-// parameter assignments (',' between assignments; an empty group = the test's configuration):
-//   GI_PROBES_SWEEP=";probes.backface_floor=0.4;probes.grid_x=16,probes.grid_y=8,probes.grid_z=16" \
-//   GI_MEDIA_DIR=../shared/scenes build/tests/gi_tests --gtest_also_run_disabled_tests \
-//     --gtest_filter='ProbesAccuracyDiagnosis.*'
-TEST(ProbesAccuracyDiagnosis, DISABLED_SponzaParameterSweep) {
-  std::string why;
-  std::optional<Scene> sponza = test::loadSponza(why);
-  if (!sponza) GTEST_SKIP() << why;
-  const Scene& s = *sponza;
-  const char* env = std::getenv("GI_PROBES_SWEEP");
-  const std::string all = env ? env : "";
-  for (size_t start = 0; start <= all.size();) {
-    size_t end = std::min(all.find(';', start), all.size());
-    std::string group = all.substr(start, end - start);
-    std::vector<std::string> sets = {"probes.update=static", "probes.rebuild_updates=8", "probes.rays=128",
-                                     "shadow.resolution=1024"};
-    for (size_t a = 0; a < group.size();) {
-      size_t b = std::min(group.find(',', a), group.size());
-      if (b > a) sets.push_back(group.substr(a, b - a));
-      a = b + 1;
-    }
-    test::AccuracyPair p = test::renderAgainstReference(s, "probes", 96, 54, sets, false, ReferenceMode::Full, false,
-                                                        "sponza_sun_full_96x54", 16);
-    std::printf("Sponza 96x54 probes [%s]: SSIM %.4f, mean %.5f vs %.5f\n", group.c_str(), displaySsim(p, s),
-                meanOf(p.raster), meanOf(p.reference));
-    start = end + 1;
-  }
+  EXPECT_GE(ssim, 0.79);
 }

@@ -2,23 +2,43 @@
 // precomputed light field probes", as seed 004 §4 implemented its "irradiance with filtered
 // visibility"; ALGORITHMS.md §6): octahedral mapping, bilinear map lookups, and the irradiance at
 // a surface point blended from its 8 surrounding probes with
-//   - trilinear weights over the probe cell,
-//   - the backface term of seed 004 eq. 7, max(0, n · (p_probe − x)/|p_probe − x|), but at least
-//     grid.backface_floor (else a point facing away from all 8 probes, e.g. a wall between the
-//     outermost probes and the bounds, would get no light at all),
+//   - a backface term of cosθ = n · (p_probe − x)/|p_probe − x|: DDGI's smooth weight
+//     ((cosθ + 1)/2)² + 0.2 (Majercik et al. 2019) with GI_PROBE_BACKFACE_SMOOTH = 1, else seed
+//     004's eq. 7, max(0, cosθ), but at least grid.backface_floor (else a point facing away from
+//     all 8 probes, e.g. a wall between the outermost probes and the bounds, would get no light),
 //   - Chebyshev visibility from the probe's filtered distance (mean μ, mean² of the distance):
 //     with r the distance from the probe to the (biased) point, r ≤ μ is visible, else
 //     σ² / (σ² + (r − μ)²), σ² = |mean² − μ²|, raised to GI_PROBE_CHEBYSHEV_POWER (DDGI's
-//     sharpening; a build define, so the power is a few multiplications; 0 = no visibility),
+//     sharpening; 0 = no visibility),
+//   - with GI_PROBE_CRUSH = 1, DDGI's crush of the product w = backface × visibility: w below
+//     t = GI_PROBE_CRUSH_THRESHOLD becomes w³/t² (Chebyshev's soft tail, the per cent or so it
+//     lets through a thin wall, is cut further), w first at least 1e-6 (a pixel whose probes are
+//     all hidden still blends them by position),
+//   - trilinear weights over the probe cell (after the crush: the crush judges visibility alone),
 //   - the probe's state (probe_types.h): 0 for a probe classified as inside geometry;
-// and the weights renormalised. The backface and visibility terms look from the probe's relocated
-// position (grid point + offset); the trilinear weights use the grid cell. Layouts: probe_types.h.
+// and the weights renormalised. With GI_PROBE_PERCEPTUAL_BLEND = 1 the probes' irradiance is
+// blended as √E (DDGI's blending "in a more perceptual space": the maps read hold √E; the sum is
+// squared). The GI_PROBE_* switches are build defines (probes.chebyshev_power,
+// probes.backface, probes.crush, probes.perceptual_blend; read at setup): no run-time branch in
+// the shading's per-probe arithmetic (as run-time switches they cost 3–5 % of the shading).
+// The backface and visibility terms look from the probe's relocated position (grid point +
+// offset); the trilinear weights use the grid cell. Layouts: probe_types.h.
 #pragma once
 #include "common/math.h"
 #include "gi/probes/probe_types.h"
 
 #ifndef GI_PROBE_CHEBYSHEV_POWER
 #define GI_PROBE_CHEBYSHEV_POWER 3  // probes.chebyshev_power
+#endif
+#ifndef GI_PROBE_BACKFACE_SMOOTH
+#define GI_PROBE_BACKFACE_SMOOTH 1  // probes.backface: 1 smooth (DDGI), 0 eq7 (seed 004)
+#endif
+#ifndef GI_PROBE_CRUSH
+#define GI_PROBE_CRUSH 1                // probes.crush > 0
+#define GI_PROBE_CRUSH_THRESHOLD 0.2f  // probes.crush
+#endif
+#ifndef GI_PROBE_PERCEPTUAL_BLEND
+#define GI_PROBE_PERCEPTUAL_BLEND 0  // probes.perceptual_blend
 #endif
 
 inline float probe_sign_not_zero(float v) { return v >= 0.0f ? 1.0f : -1.0f; }
@@ -85,8 +105,29 @@ inline float3 probe_position(const GiProbeGrid* g, int3 i) {
   return vload3(0, g->origin) + convert_float3(i) * vload3(0, g->spacing);
 }
 
+// The backface term for cosθ = n · (direction to the probe), and DDGI's crush of a backface ×
+// visibility weight w in place: w · min(1, w²/t²) is w³/t² below t and w above it (see the top of
+// this file). Macros, so that the scalar function below and the lane-wise shading (probes.cl)
+// share one formula for float and floatV; the arguments are variables.
+#if GI_PROBE_BACKFACE_SMOOTH
+#define PROBE_BACKFACE_WEIGHT(g, cosine) ((0.5f * ((cosine) + 1.0f)) * (0.5f * ((cosine) + 1.0f)) + 0.2f)
+#else
+#define PROBE_BACKFACE_WEIGHT(g, cosine) fmax((g)->backface_floor, (cosine))
+#endif
+#if GI_PROBE_CRUSH
+#define PROBE_CRUSH_WEIGHT(w)                                                                        \
+  {                                                                                                  \
+    w = fmax(w, 1e-6f);                                                                              \
+    w *= fmin(w * w * (1.0f / (GI_PROBE_CRUSH_THRESHOLD * GI_PROBE_CRUSH_THRESHOLD)), 1.0f);         \
+  }
+#else
+#define PROBE_CRUSH_WEIGHT(w) \
+  {}
+#endif
+
 // Irradiance E (W/m²) at surface point x with shading normal n, geometric normal ng and unit
-// direction wo towards the viewer (the camera, or a probe ray's origin).
+// direction wo towards the viewer (the camera, or a probe ray's origin). `irradiance`: the maps of
+// E, or of √E with GI_PROBE_PERCEPTUAL_BLEND.
 inline float3 probe_field_irradiance(const GiProbeGrid* g, global const float4* irradiance,
                                      global const float2* distance, global const float4* probeStates, float3 x,
                                      float3 n, float3 ng, float3 wo) {
@@ -105,15 +146,14 @@ inline float3 probe_field_irradiance(const GiProbeGrid* g, global const float4* 
   for (int c = 0; c < 8; ++c) {
     int3 off = (int3)(c & 1, (c >> 1) & 1, c >> 2);
     float3 tri = select(1.0f - alpha, alpha, off != 0);
-    float w = tri.x * tri.y * tri.z;
     int3 pi = min(base + off, count - 1);  // a one-probe axis uses probe 0 for both corners
     int probe = (pi.z * count.y + pi.y) * count.x + pi.x;
     float4 state = probeStates[probe];
     float3 pp = probe_position(g, pi) + state.xyz;
-    w *= state.w;
     float3 toProbe = pp - x;
     float len = length(toProbe);
-    w *= len > 0.0f ? fmax(g->backface_floor, dot(n, toProbe / len)) : 1.0f;  // seed 004 eq. 7
+    float cosine = dot(n, toProbe / len);
+    float w = len > 0.0f ? PROBE_BACKFACE_WEIGHT(g, cosine) : 1.0f;
     float3 fromProbe = xb - pp;
     float r = length(fromProbe);
     float2 m = probe_sample_distance(distance, probe, g->distance_res, r > 0.0f ? fromProbe / r : n);
@@ -122,8 +162,11 @@ inline float3 probe_field_irradiance(const GiProbeGrid* g, global const float4* 
 #pragma unroll
     for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
     w *= r > m.x ? v : 1.0f;
+    PROBE_CRUSH_WEIGHT(w)
+    w *= (tri.x * tri.y * tri.z) * state.w;
     sum += w * probe_sample_irradiance(irradiance, probe, g->irradiance_res, n);
     wsum += w;
   }
-  return wsum > 0.0f ? sum / wsum : (float3)(0.0f);
+  float3 e = wsum > 0.0f ? sum / wsum : (float3)(0.0f);
+  return GI_PROBE_PERCEPTUAL_BLEND ? e * e : e;
 }

@@ -33,7 +33,7 @@ typedef struct {
   GI_I32 irradiance_res;     // interior texels per side of an irradiance map
   GI_I32 distance_res;       // interior texels per side of a distance map
   GI_I32 rays;               // rays per probe per update
-  float backface_floor;      // smallest backface weight (a point facing away from every probe still blends)
+  float backface_floor;      // smallest backface weight of seed 004's eq. 7 (a point facing away from every probe still blends)
   float pad[4];
 } GiProbeGrid;  // 80 bytes
 

@@ -187,6 +187,13 @@ inline int probe_border_source(int x, int y, int res) {
 PROBE_BORDER_KERNEL(probe_border_irradiance, float4)
 PROBE_BORDER_KERNEL(probe_border_distance, float2)
 
+// probes.perceptual_blend: the map the shading and the probe rays read holds √E of every texel
+// (borders included); the blends keep E itself, so the temporal mean stays a mean of irradiance.
+kernel void probe_encode_sqrt(global const float4* irradiance, int texels, global float4* encoded) {
+  int i = get_global_id(0);
+  if (i < texels) encoded[i] = sqrt(irradiance[i]);
+}
+
 // DDGI probe relocation and classification (Majercik et al. 2021, "Scaling probe-based real-time
 // dynamic global illumination for production", §5), from this update's rays of the probe:
 //   - more than `backfaceFraction` of the rays hit back faces: the probe is inside geometry. It
@@ -384,10 +391,10 @@ typedef struct {
   floatV Ex, Ey, Ez, wsum;
 } ProbeBlendV;
 
-// The weight of one probe: trilinear weight w (times the probe's active flag) × backface term ×
-// Chebyshev visibility from the probe's relocated position pp and its distance map distMap (for
-// the lanes set in `lanes`; one pixel per work-item: the whole map array, the probe's map at
-// texel offset distBase).
+// The weight of one probe: trilinear weight w (times the probe's active flag) × the crushed
+// backface term × Chebyshev visibility from the probe's relocated position pp and its distance
+// map distMap (for the lanes set in `lanes`; one pixel per work-item: the whole map array, the
+// probe's map at texel offset distBase).
 __attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g, const ProbeBlendV* b, floatV w,
                                                            floatV ppx, floatV ppy, floatV ppz,
                                                            global const float* distMap, intV distBase, intV lanes,
@@ -395,8 +402,8 @@ __attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g,
   int dres = g->distance_res, dside = dres + 2;
   floatV tpx = ppx - b->x.x, tpy = ppy - b->x.y, tpz = ppz - b->x.z;
   floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
-  w *= GI_SEL((floatV)(1.0f), fmax(g->backface_floor, (b->n.x * tpx + b->n.y * tpy + b->n.z * tpz) / len),
-              len > 0.0f);
+  floatV cosine = (b->n.x * tpx + b->n.y * tpy + b->n.z * tpz) / len;
+  floatV backface = GI_SEL((floatV)(1.0f), PROBE_BACKFACE_WEIGHT(g, cosine), len > 0.0f);
   floatV fpx = b->xb.x - ppx, fpy = b->xb.y - ppy, fpz = b->xb.z - ppz;
   floatV r = sqrt(fpx * fpx + fpy * fpy + fpz * fpz);
   intV far = r > 0.0f;
@@ -414,7 +421,9 @@ __attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g,
   floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
 #pragma unroll
   for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
-  return w * GI_SEL((floatV)(1.0f), v, r > mean);
+  floatV visible = backface * GI_SEL((floatV)(1.0f), v, r > mean);
+  PROBE_CRUSH_WEIGHT(visible)
+  return w * visible;
 }
 
 #if GI_VW > 1
@@ -589,7 +598,12 @@ __attribute__((always_inline)) inline float3V probe_field_irradianceV(const GiPr
   probe_cell_pixelV(g, &b, irradiance, distance, probeStates, bx, by, bz, ax, ay, az);
 #endif
   floatV inv = GI_SEL(zero, 1.0f / b.wsum, b.wsum > 0.0f);
-  return f3v(b.Ex * inv, b.Ey * inv, b.Ez * inv);
+  floatV ex = b.Ex * inv, ey = b.Ey * inv, ez = b.Ez * inv;
+#if GI_PROBE_PERCEPTUAL_BLEND
+  return f3v(ex * ex, ey * ey, ez * ez);  // the maps read hold √E
+#else
+  return f3v(ex, ey, ez);
+#endif
 }
 
 // A work-item's pixels form a tile of 2^shift × GI_VW / 2^shift pixels, lane l at

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 
@@ -105,7 +106,8 @@ std::vector<glm::vec4> probeRayDirections(int rays, uint32_t update) {
 }
 
 ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& s)
-    : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce), downsample_(s.downsample),
+    : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce), perceptualBlend_(s.perceptualBlend),
+      downsample_(s.downsample),
       relocation_(s.relocate), backfaceFraction_(s.backfaceFraction),
       minFrontface_(s.minFrontface * std::min({grid_.spacing[0], grid_.spacing[1], grid_.spacing[2]})) {
   upsampleTest_.tauZ = s.tauZ;
@@ -115,9 +117,15 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   // The shading kernel is bound by per-lane loads of map texels: the gather width (8 lanes on
   // AVX2, where 16-lane code spills registers; cl/gather_width.h).
   vectorWidth_ = cl::gatherVectorWidth(ctx);
-  program_ = ctx.buildProgram("kernels/gi/probes/probes.cl",
-                              cl::withGatherWidth(ctx, {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)},
-                                                        {"GI_PROBE_CHEBYSHEV_POWER", std::to_string(s.chebyshevPower)}}));
+  char crush[32];
+  std::snprintf(crush, sizeof crush, "%.9gf", double(s.crushThreshold));
+  defines_ = cl::withGatherWidth(ctx, {{"GI_PROBE_DISTANCE_EXPONENT_LOG2", std::to_string(s.distanceExponentLog2)},
+                                       {"GI_PROBE_CHEBYSHEV_POWER", std::to_string(s.chebyshevPower)},
+                                       {"GI_PROBE_BACKFACE_SMOOTH", s.smoothBackface ? "1" : "0"},
+                                       {"GI_PROBE_CRUSH", s.crushThreshold > 0.0f ? "1" : "0"},
+                                       {"GI_PROBE_CRUSH_THRESHOLD", crush},
+                                       {"GI_PROBE_PERCEPTUAL_BLEND", s.perceptualBlend ? "1" : "0"}});
+  program_ = ctx.buildProgram("kernels/gi/probes/probes.cl", defines_);
   trace_ = program_.kernel("probe_trace");
   relocate_ = program_.kernel("probe_relocate");
   blendIrradiance_ = program_.kernel("probe_blend_irradiance");
@@ -128,7 +136,7 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   size_t probes = size_t(probeCount());
   size_t irrTexels = probes * size_t(s.irradianceRes + 2) * size_t(s.irradianceRes + 2);
   size_t distTexels = probes * size_t(s.distanceRes + 2) * size_t(s.distanceRes + 2);
-  ctx.requireAllocation(irrTexels * 16 + distTexels * 8 + probes * size_t(s.rays) * 16 + probes * 16,
+  ctx.requireAllocation(irrTexels * 16 * (s.perceptualBlend ? 2 : 1) + distTexels * 8 + probes * size_t(s.rays) * 16 + probes * 16,
                         "probes: maps and rays (probes.grid_*, probes.*_res, probes.rays)");
   irradiance_ = cl::Buffer(ctx, irrTexels * 16, CL_MEM_READ_WRITE, "probe irradiance maps");
   distance_ = cl::Buffer(ctx, distTexels * 8, CL_MEM_READ_WRITE, "probe distance maps");
@@ -139,6 +147,11 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   // Before the first update: no light, and every direction open up to the ray length (the first
   // update replaces both wherever a ray landed).
   ctx.fill(irradiance_, glm::vec4(0.0f));
+  if (perceptualBlend_) {
+    encodeSqrt_ = program_.kernel("probe_encode_sqrt");
+    irradianceSqrt_ = cl::Buffer(ctx, irrTexels * 16, CL_MEM_READ_WRITE, "probe irradiance maps, square roots");
+    ctx.fill(irradianceSqrt_, glm::vec4(0.0f));
+  }
   ctx.fill(distance_, glm::vec2(grid_.max_distance, grid_.max_distance * grid_.max_distance));
   instanceEmits_ = ctx.upload(instanceEmissionFlags(scene), "probe instance emission flags");
 }
@@ -155,7 +168,7 @@ void ProbeField::trace(const DeviceScene& scene, bool shadeHits) {
   trace_.setArg(a++, scene.lights);
   trace_.setArg(a++, shadeHits ? int(scene.lightCount) : 0);  // no lights: no shadow rays
   trace_.setArg(a++, rayDirs_);
-  trace_.setArg(a++, irradiance_);
+  trace_.setArg(a++, irradianceLookup());
   trace_.setArg(a++, distance_);
   trace_.setArg(a++, states_);
   trace_.setArg(a++, int(shadeHits && multiBounce_ && updates_ > 0));
@@ -203,6 +216,11 @@ void ProbeField::update(const DeviceScene& scene, float maxHysteresis, bool move
   ctx_.launch(borderIrradiance_, cl::NDRange::d1(cl::roundUp(probes * irrSide * irrSide, 64), 64), "probes: irradiance borders");
   borderDistance_.args(distance_, grid_.distance_res, int(probes));
   ctx_.launch(borderDistance_, cl::NDRange::d1(cl::roundUp(probes * distSide * distSide, 64), 64), "probes: distance borders");
+  if (perceptualBlend_) {
+    int texels = int(probes * irrSide * irrSide);
+    encodeSqrt_.args(irradiance_, texels, irradianceSqrt_);
+    ctx_.launch(encodeSqrt_, cl::NDRange::d1(cl::roundUp(size_t(texels), 64), 64), "probes: irradiance square roots");
+  }
   ++updates_;
 }
 
@@ -214,7 +232,7 @@ void ProbeField::shade(const GBuffer& g, cl::Buffer& indirect) {
       low_ = cl::Buffer(ctx_, size_t(lw) * lh * 16, CL_MEM_READ_WRITE, "probes low-res irradiance");
     target = &low_;
   }
-  shade_.args(grid_, irradiance_, distance_, states_, g.view, g.position, g.geoNormal, g.normal, g.albedo, d, *target);
+  shade_.args(grid_, irradianceLookup(), distance_, states_, g.view, g.position, g.geoNormal, g.normal, g.albedo, d, *target);
   // One work-item shades a tile of 2^shift × vector width / 2^shift pixels (PROBE_TILE_SHIFT in
   // kernels/gi/probes/probes.cl: 16 lanes 8 × 2 at full resolution and 4 × 4 below it, 8 lanes
   // 4 × 2, one pixel at 1).

@@ -35,7 +35,10 @@ struct ProbeSettings {
   int rays = 64;                 // rays per probe per update
   int distanceExponentLog2 = 6;  // distance filter weight max(0, cos)^(2^this)
   int chebyshevPower = 3;
-  float backfaceFloor = 0.05f;    // smallest backface weight
+  bool smoothBackface = true;    // DDGI's smooth backface weight ((n·ω + 1)/2)² + 0.2; false: seed 004's eq. 7
+  float backfaceFloor = 0.05f;    // eq. 7: smallest backface weight
+  float crushThreshold = 0.2f;   // DDGI's crush of small backface × visibility weights; 0 = off
+  bool perceptualBlend = false;  // blend the probes' irradiance as √E (DDGI)
   bool multiBounce = true;       // ray hits also gather the probes' previous irradiance
   float normalBias = 0.045f;     // fractions of the smallest probe spacing
   float viewBias = 0.18f;
@@ -87,24 +90,34 @@ public:
   int probeCount() const { return grid_.count[0] * grid_.count[1] * grid_.count[2]; }
   uint32_t updates() const { return updates_; }
   const cl::Buffer& irradiance() const { return irradiance_; }  // float4 per texel, layout probe_types.h
+  // The maps the shading and the probe rays read: irradiance(), or its square roots (√E per texel)
+  // with perceptual blending.
+  const cl::Buffer& irradianceLookup() const { return perceptualBlend_ ? irradianceSqrt_ : irradiance_; }
+  // The probe program's build defines (kernels/gi/probes/probe_field.h's switches): a test program
+  // that calls probe_field_irradiance() builds with the same.
+  const cl::Defines& programDefines() const { return defines_; }
   const cl::Buffer& distance() const { return distance_; }      // float2 per texel
   const cl::Buffer& states() const { return states_; }          // float4 per probe: offset, active
-  uint64_t mapBytes() const { return irradiance_.bytes() + distance_.bytes(); }
+  uint64_t mapBytes() const { return irradiance_.bytes() + irradianceSqrt_.bytes() + distance_.bytes(); }
   uint64_t rayBytes() const { return rayResults_.bytes() + rayDirs_.bytes(); }
   uint64_t bvhBytes() const { return bvh_->bytes(); }
 
 private:
   cl::Context& ctx_;
   GiProbeGrid grid_;
-  bool multiBounce_;
+  bool multiBounce_, perceptualBlend_;
+  cl::Defines defines_;
   int downsample_;
   int vectorWidth_;  // GI_VW of the probe program: pixels or texels per work-item
   GeometryTest upsampleTest_;
   std::unique_ptr<DeviceBvh> bvh_;
   std::unique_ptr<GeometryAwareUpsampler> upsampler_;
   cl::Program program_;
-  cl::Kernel trace_, relocate_, blendIrradiance_, blendDistance_, borderIrradiance_, borderDistance_, shade_;
-  cl::Buffer irradiance_, distance_, states_, rayDirs_, rayResults_, instanceEmits_, low_;
+  cl::Kernel trace_, relocate_, blendIrradiance_, blendDistance_, borderIrradiance_, borderDistance_, encodeSqrt_,
+      shade_;
+  // irradianceSqrt_: √E of irradiance_, what the shading and the probe rays read with
+  // perceptual blending (else unused: they read irradiance_).
+  cl::Buffer irradiance_, irradianceSqrt_, distance_, states_, rayDirs_, rayResults_, instanceEmits_, low_;
   bool relocation_;
   float backfaceFraction_, minFrontface_;  // minFrontface_ in metres
   void trace(const DeviceScene& deviceScene, bool shadeHits);

@@ -21,6 +21,9 @@ ProbeSettings probeSettings(const ParamSet& p) {
   s.chebyshevPower = p.getInt("probes.chebyshev_power");
   s.multiBounce = p.getBool("probes.multibounce");
   s.backfaceFloor = p.getFloat("probes.backface_floor");
+  s.smoothBackface = p.getChoice("probes.backface") == "smooth";
+  s.crushThreshold = p.getFloat("probes.crush");
+  s.perceptualBlend = p.getBool("probes.perceptual_blend");
   s.normalBias = p.getFloat("probes.normal_bias");
   s.viewBias = p.getFloat("probes.view_bias");
   s.maxDistance = p.getFloat("probes.max_distance");
@@ -93,8 +96,14 @@ TechniqueInfo probesTechniqueInfo() {
             p.addChoice("probes.distance_exponent", "64", {"1", "2", "4", "8", "16", "32", "64"},
                         "distance filter: ray weight max(0, cos)^this");
             p.addInt("probes.chebyshev_power", 3, 0, 8, "the Chebyshev visibility bound is raised to this power");
+            p.addChoice("probes.backface", "smooth", {"eq7", "smooth"},
+                        "backface weight: eq7 = max(backface_floor, n . direction to the probe) (seed 004 eq. 7); "
+                        "smooth = ((n . direction + 1)/2)^2 + 0.2 (DDGI)");
             p.addFloat("probes.backface_floor", 0.05, 0.0, 1.0,
-                        "smallest backface weight max(floor, n . direction to the probe) (seed 004 eq. 7 has 0)");
+                        "eq7: smallest backface weight max(floor, n . direction to the probe) (seed 004 eq. 7 has 0)");
+            p.addFloat("probes.crush", 0.2, 0.0, 1.0,
+                       "DDGI: backface x visibility weights w below this become w^3/crush^2 (DDGI 0.2); 0 = off");
+            p.addBool("probes.perceptual_blend", false, "blend the probes' irradiance as its square root, square the sum (DDGI)");
             p.addFloat("probes.normal_bias", 0.045, 0.0, 1.0, "visibility test point offset along the normal, fraction of the smallest probe spacing");
             p.addFloat("probes.view_bias", 0.18, 0.0, 1.0, "visibility test point offset towards the viewer, fraction of the smallest probe spacing");
             p.addInt("probes.downsample", 1, 1, 4, "shade at 1/downsample resolution, then upsample geometry-aware");
