@@ -172,6 +172,21 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
   GI_STORE_LANES(uint, w, records, i0, valid)
 }
 
+// The records at the lanes' indices q. With AVX-512 (GI_VW 16 on x86 CPUs) one vpgatherdd with
+// the 32-bit indices: GI_GATHER compiles to two vpgatherqd on 64-bit indices (each index sign-
+// extended, the halves split and joined); the one gather took 5–11 % less CPU time of planes +
+// occlusion on the 2-core AMD EPYC with AVX-512 (docs/PERFORMANCE.md). The builtin takes a flat pointer: x86
+// OpenCL CPU devices have one address space (only they define __AVX512F__).
+#if defined(__has_builtin) && GI_VW == 16 && defined(__AVX512F__)
+#if __has_builtin(__builtin_ia32_gathersiv16si)
+#define SSAO_GATHER_RECORDS(records, q) \
+  as_uint16(__builtin_ia32_gathersiv16si((int16)(0), (const void*)(size_t)(records), (q), (ushort)0xffff, 4))
+#endif
+#endif
+#ifndef SSAO_GATHER_RECORDS
+#define SSAO_GATHER_RECORDS(records, q) GI_GATHER(uintV, records, q)
+#endif
+
 // t + 1 clamped to [0, n + 1], NaN -> 0, as two selects that compile to one vmaxps and one vminps
 // each (fmin/fmax with their NaN rules took three instructions each).
 inline floatV ssao_clamp_index(floatV t, float n) {
@@ -244,7 +259,10 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
   floatV Ex = (floatV)(0.0f), Ey = (floatV)(0.0f), Ez = (floatV)(0.0f);
 #endif
   intV occluded = (intV)(0);  // samples occluded
-#pragma unroll
+  // Unrolled by 4, not fully: the fully unrolled 16 samples kept ≈ 300 vector spills and reloads in
+  // the AVX-512 build (all gathers hoisted, their results parked on the stack); by 4 planes +
+  // occlusion take ≈ 17 % less CPU time (by 2 and by 8 more than by 4; docs/PERFORMANCE.md).
+#pragma unroll 4
   for (int i = 0; i < GI_SSAO_SAMPLES; ++i) {
     float4 k = kernelVectors[i];
     floatV Sx = Px + k.x * Tx + k.y * Bx + k.z * Nx;
@@ -264,7 +282,7 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
     intV ix = convert_intV(ssao_clamp_index(tx, W)) - 1, iy = convert_intV(ssao_clamp_index(ty, H)) - 1;
     intV ok = (Sz > 0.0f) & (as_uintV(ix) < (uint)gridWidth) & (as_uintV(iy) < (uint)gridHeight);
     intV q = GI_SEL((intV)(0), iy * gridWidth + ix, ok);
-    uintV w = GI_GATHER(uintV, records, q);
+    uintV w = SSAO_GATHER_RECORDS(records, q);
     // q's record describes the plane at camera pixel (D·ix, D·iy); decoded as ssao_encode_record:
     // A, and A·g = m·A·2^(E−15) (the exponent fields added: exact).
     uintV aField = (w >> 4) & 0x0ffff000u;
@@ -319,15 +337,54 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
 #endif
 }
 
+// indirect = keep·indirect_upstream (xyz; w kept) for the GI_VW pixels from i0, in place: each
+// 16-float row (four pixels) times (keep_p, keep_p, keep_p, 1) of its pixels (one permutation of
+// keep; w·1 = w exactly), instead of transposing GI_VW float4 into four floatV and back, which
+// compiled to ≈ 100 loads and shuffles and took half of the blur's time. The same products.
+#if GI_VW == 16
+#define SSAO_KEEP_ROW(keep, one, c)                                                                          \
+  shuffle2(keep, one, (uint16)(4 * (c), 4 * (c), 4 * (c), 16, 4 * (c) + 1, 4 * (c) + 1, 4 * (c) + 1, 16,     \
+                               4 * (c) + 2, 4 * (c) + 2, 4 * (c) + 2, 16, 4 * (c) + 3, 4 * (c) + 3, 4 * (c) + 3, 16))
+#elif GI_VW == 8
+#define SSAO_KEEP_ROW(keep, one, c)                                                                          \
+  shuffle2(keep, one, (uint16)(4 * (c), 4 * (c), 4 * (c), 8, 4 * (c) + 1, 4 * (c) + 1, 4 * (c) + 1, 8,       \
+                               4 * (c) + 2, 4 * (c) + 2, 4 * (c) + 2, 8, 4 * (c) + 3, 4 * (c) + 3, 4 * (c) + 3, 8))
+#endif
+inline void ssao_scale_indirect(global float4* indirect, int i0, int valid, floatV keep) {
+#if GI_VW == 1
+  float4 v = indirect[i0];
+  indirect[i0] = (float4)(v.xyz * keep, v.w);
+#else
+  if (valid == GI_VW) {
+    global float* row = (global float*)(indirect + i0);
+    floatV one = (floatV)(1.0f);
+#pragma unroll
+    for (int c = 0; c < GI_VW / 4; ++c) vstore16(vload16(c, row) * SSAO_KEEP_ROW(keep, one, c), c, row);
+  } else {
+    float k[GI_VW];
+    vstoreV(keep, 0, k);
+    for (int l = 0; l < valid; ++l) {
+      float4 v = indirect[i0 + l];
+      indirect[i0 + l] = (float4)(v.xyz * k[l], v.w);
+    }
+  }
+#endif
+}
+
 // The composition of GI_VW pixels from pixel i0 (valid of them in the image): stores the blurred
 // occlusion occ and indirect = (1 − occ)·indirect_upstream + albedo·k·E, k = the E normalisation
 // over π (0 off surfaces).
+// Without bleeding only the upstream term is scaled (ssao_scale_indirect).
 inline void ssao_compose(int i0, int valid, floatV occ, floatV k, floatV Ex, floatV Ey, floatV Ez, int upstream,
                          int bleeding, global const float4* albedo, global float* occlusionOut,
                          global float4* indirect) {
   float tmp[4 * GI_VW];
   floatV zero = (floatV)(0.0f);
   ssao_store1(occlusionOut, i0, valid, occ);
+  if (upstream && !bleeding) {
+    ssao_scale_indirect(indirect, i0, valid, 1.0f - occ);
+    return;
+  }
   floatV ix = zero, iy = zero, iz = zero, iw = zero;
   if (upstream) SSAO_LOAD4(indirect, i0, valid, ix, iy, iz, iw)
   floatV keep = 1.0f - occ;
