@@ -103,7 +103,7 @@ size_t levelOffset(int N, int level) {
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
 struct TraceParams {
   float startOffset = 0, maxDistance = 0, stepFactor = 0.5f, aoLambda = 0;
-  int32_t anisotropic = 0, applyAo = 0, footprintInFront = 0, levelSteps = 0;
+  int32_t anisotropic = 0, applyAo = 0, footprintInFront = 0, levelSteps = 0, specularLevelSteps = 0;
 };
 
 struct ConeOut {
@@ -1327,7 +1327,9 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
 // holds 0.1 beforehand) over `level0` with anisotropic mips: it must add what the
 // one-cone-at-a-time march (vct_trace_cones) along the host's mirror directions, times the host's
 // Schlick Fresnel, gives, and skipping the lookups the empty-space map shows empty must change no
-// bit (the same kernel with a map that marks every cell occupied).
+// bit (the same kernel with a map that marks every cell occupied). Both marches: continuous and
+// level-aligned (tp.specularLevelSteps; that march takes no map, so for it the skip comparison only
+// guards that the map stays unused).
 void checkSpecularLanes(const std::vector<glm::vec4>& level0, uint32_t seed, const char* label) {
   cl::Context& ctx = test::context();
   Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
@@ -1377,39 +1379,44 @@ void checkSpecularLanes(const std::vector<glm::vec4>& level0, uint32_t seed, con
     pixel.push_back(i);
   }
   ASSERT_GT(pixel.size(), size_t(count / 3));
-  ConeOut ref = traceCones(vs, tp, cones, dirs);
   cl::Buffer bPos = ctx.upload(pos, "positions"), bNrm = ctx.upload(nrm, "normals"), bSpec = ctx.upload(spec, "specular");
-  for (int lanes : {cl::gatherVectorWidth(ctx), 1}) {
-    cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
-                                        {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VW", std::to_string(lanes)}});
-    cl::Kernel k = prog.kernel("vct_specular");
-    std::vector<glm::vec4> got[2];
-    for (int skip = 0; skip < 2; ++skip) {
-      cl::Buffer out = ctx.upload(base, "indirect", CL_MEM_READ_WRITE);  // the kernel adds to it
-      k.args(g, tp, vs.iso(), vs.aniso(), vs.iso(), vs.iso(), skip ? vs.emptySpace() : noEmptySpace, cam, bPos, bNrm,
-             bSpec, out);
-      int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
-      ctx.launch(k, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8), cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
-      got[skip] = ctx.download<glm::vec4>(out);
-      ctx.profiler().discard();
-    }
-    std::vector<glm::vec4> expected = base;
-    for (size_t j = 0; j < pixel.size(); ++j)
-      expected[pixel[j]] += glm::vec4(fresnel[j] * glm::vec3(ref.radiance[j]), 0.0f);
-    float worst = 0, largest = 0;
-    int changedBySkipping = 0;
-    for (int i = 0; i < count; ++i)
-      for (int c = 0; c < 4; ++c) {
-        worst = std::max(worst, std::abs(got[1][i][c] - expected[i][c]));
-        largest = std::max(largest, std::abs(expected[i][c] - base[i][c]));
-        changedBySkipping += got[1][i][c] != got[0][i][c];
+  // The continuous march, then the level-aligned one (vct_trace_cones follows tp.specularLevelSteps).
+  for (int levelSteps = 0; levelSteps < 2; ++levelSteps) {
+    tp.specularLevelSteps = levelSteps;
+    ConeOut ref = traceCones(vs, tp, cones, dirs);
+    for (int lanes : {cl::gatherVectorWidth(ctx), 1}) {
+      cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
+                                          {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VW", std::to_string(lanes)}});
+      cl::Kernel k = prog.kernel("vct_specular");
+      std::vector<glm::vec4> got[2];
+      for (int skip = 0; skip < 2; ++skip) {
+        cl::Buffer out = ctx.upload(base, "indirect", CL_MEM_READ_WRITE);  // the kernel adds to it
+        k.args(g, tp, vs.iso(), vs.aniso(), vs.iso(), vs.iso(), skip ? vs.emptySpace() : noEmptySpace, cam, bPos, bNrm,
+               bSpec, out);
+        int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
+        ctx.launch(k, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8), cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
+        got[skip] = ctx.download<glm::vec4>(out);
+        ctx.profiler().discard();
       }
-    std::printf("specular cone, %s, %d lanes vs one cone at a time (anisotropic mips, %zu of %d pixels, %zu of %zu "
-                "map cells empty): max abs difference %.2e (largest term %.3f); %d values changed by the empty-space "
-                "skip\n", label, lanes, pixel.size(), count, emptyCells, map.size(), worst, largest, changedBySkipping);
-    EXPECT_GT(largest, 0.05f);
-    EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));
-    EXPECT_EQ(changedBySkipping, 0);
+      std::vector<glm::vec4> expected = base;
+      for (size_t j = 0; j < pixel.size(); ++j)
+        expected[pixel[j]] += glm::vec4(fresnel[j] * glm::vec3(ref.radiance[j]), 0.0f);
+      float worst = 0, largest = 0;
+      int changedBySkipping = 0;
+      for (int i = 0; i < count; ++i)
+        for (int c = 0; c < 4; ++c) {
+          worst = std::max(worst, std::abs(got[1][i][c] - expected[i][c]));
+          largest = std::max(largest, std::abs(expected[i][c] - base[i][c]));
+          changedBySkipping += got[1][i][c] != got[0][i][c];
+        }
+      std::printf("specular cone, %s march, %s, %d lanes vs one cone at a time (anisotropic mips, %zu of %d pixels, "
+                  "%zu of %zu map cells empty): max abs difference %.2e (largest term %.3f); %d values changed by the "
+                  "empty-space skip\n", levelSteps ? "level-aligned" : "continuous", label, lanes, pixel.size(), count,
+                  emptyCells, map.size(), worst, largest, changedBySkipping);
+      EXPECT_GT(largest, 0.05f);
+      EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));
+      EXPECT_EQ(changedBySkipping, 0);
+    }
   }
 }
 

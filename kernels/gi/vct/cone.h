@@ -80,33 +80,49 @@ inline ConeResult vct_cone(VoxelMips m, float3 o, float3 d, float tanHalf, float
   return r;
 }
 
-// The level-aligned march (vct.diffuse_steps=levels, the default for the diffuse cones): samples
-// where the diameter is a power of two, D_l = 2^l voxels at t_l = 2^l / (2·tan θ), l = 0, 1, …, so
-// that each sample reads exactly one level, log2 D_l = l, with one trilinear lookup (the march
-// above blends two levels at fractional log2 D). The sample at t_l stands for the segment from
-// t_(l−1) (t_(−1) = 0) to t_l: Δt = t_l / 2 for l ≥ 1, i.e. Δt/D = 1/(4·tan θ) = 0.43 for the 60°
-// diffuse cones, and its opacity is corrected by Δt/D as above. Levels past the top of the chain
+// The level-aligned march (vct.diffuse_steps=levels, the default for the diffuse cones;
+// vct.specular_steps=levels for the specular cone): samples where the diameter is at most a power
+// of two, each reading exactly that level with one trilinear lookup (the march above blends two
+// levels at fractional log2 D). Level l stands for the segment of the cone where its diameter is
+// in (2^(l−1), 2^l] voxels, (t_(l−1), t_l] with t_l = 2^l / (2·tan θ) (level 0 from t = 0: the
+// diameter is at least one voxel), split into k_l equal steps of at most max(½, stepFactor·2^l)
+// voxels (k_l = 1 for stepFactor = ∞: one sample per level, at t_l, the diffuse cones); each of its
+// samples reads level l and its opacity is corrected by Δt/2^l as above. For the diffuse cones'
+// 60° apertures Δt/D = 1/(4·tan θ) = 0.43; a narrow specular cone (tan θ = 0.04) takes 13 steps of
+// half a diameter per level instead of one step of 6.3 diameters. Levels past the top of the chain
 // sample the top (1³) level with the cone's diameter. Same stop rules as vct_cone. Without
 // footprint-in-front only (that mode caps D below the cone's diameter: the continuous march).
-inline ConeResult vct_cone_levels(VoxelMips m, float3 o, float3 d, float tanHalf, float maxDistance, float aoLambda) {
+inline ConeResult vct_cone_levels(VoxelMips m, float3 o, float3 d, float tanHalf, float maxDistance, float stepFactor,
+                                  float aoLambda) {
   ConeResult r;
   float3 c = (float3)(0.0f);
   float a = 0.0f, occ = 0.0f;
   float tPrevious = 0.0f, limit = (float)m.N;
+  float tUnit = 0.5f / tanHalf;  // where the cone's diameter is one voxel
   float diameter = 1.0f;
-  for (int level = 0;; ++level, diameter *= 2.0f) {
-    float t = diameter * (0.5f / tanHalf);
-    if (t > maxDistance) break;
-    float step = t - tPrevious;
-    tPrevious = t;
-    float3 p = o + d * t;
-    float margin = 0.5f * diameter;
-    if (any(p < -margin) || any(p > limit + margin)) break;
-    float4 s = vox_level_sample(m, min(level, m.levels - 1), p, d);
+  for (int level = 0, more = 1; more; ++level, diameter *= 2.0f) {
+    float tEnd = diameter * tUnit, tStart = level == 0 ? 0.0f : 0.5f * tEnd;
+    float steps = fmax(1.0f, ceil((tEnd - tStart) / fmax(0.5f, stepFactor * diameter)));
+    float delta = (tEnd - tStart) / steps;
+    for (float j = 1.0f; j <= steps; j += 1.0f) {
+      float t = j == steps ? tEnd : tStart + j * delta;
+      float3 p = o + d * t;
+      float margin = 0.5f * diameter;
+      if (t > maxDistance || any(p < -margin) || any(p > limit + margin)) {
+        more = 0;
+        break;
+      }
+      float step = t - tPrevious;
+      tPrevious = t;
+      float4 s = vox_level_sample(m, min(level, m.levels - 1), p, d);
 #if GI_VCT_SH
-    s.xyz = fmax(s.xyz, 0.0f);
+      s.xyz = fmax(s.xyz, 0.0f);
 #endif
-    if (vct_composite(s, step / diameter, aoLambda * t, &c, &a, &occ)) break;
+      if (vct_composite(s, step / diameter, aoLambda * t, &c, &a, &occ)) {
+        more = 0;
+        break;
+      }
+    }
   }
   r.radiance = (float4)(c, a);
   r.occlusion = occ;
@@ -162,7 +178,7 @@ inline float4 vct_diffuse_irradiance(VoxelMips m, float3 p, float3 n, float star
     float4 cone = VCT_CONES[i];
     float3 d = normalize(t * cone.x + b * cone.y + n * cone.z);
     ConeResult r = levelSteps && !footprintInFront
-                       ? vct_cone_levels(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, aoLambda)
+                       ? vct_cone_levels(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, INFINITY, aoLambda)
                        : vct_cone(m, o, d, VCT_DIFFUSE_TAN_HALF, maxDistance, stepFactor, aoLambda,
                                   footprintInFront ? startOffset : INFINITY, cone.z);
     E += cone.w * r.radiance.xyz;

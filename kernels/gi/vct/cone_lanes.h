@@ -440,6 +440,15 @@ __attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelM
 #endif
 }
 
+// SH voxels: a lookup's radiance clamped at 0 (the l ≤ 1 reconstruction can go negative).
+__attribute__((always_inline)) inline void vct_clamp_sh_lanes(RgbaV* c) {
+#if GI_VCT_SH
+  c->r = fmax(c->r, 0.0f);
+  c->g = fmax(c->g, 0.0f);
+  c->b = fmax(c->b, 0.0f);
+#endif
+}
+
 // vox_sample for the lanes: quadrilinear at a fractional level per lane.
 inline RgbaV vox_sample_lanes(VoxelMipsV m, float3V p, float3V d, floatV level) {
   level = clamp(level, 0.0f, (float)(m.levels - 1));
@@ -452,11 +461,7 @@ inline RgbaV vox_sample_lanes(VoxelMipsV m, float3V p, float3V d, floatV level) 
   c.r = c.g = c.b = c.a = (floatV)(0.0f);
   vox_level_sample_lanes(m, l0, p, d, 1.0f - w1, &c);
   if (GI_ANY(second)) vox_level_sample_lanes(m, min(l0 + 1, m.levels - 1), p, d, w1, &c);
-#if GI_VCT_SH
-  c.r = fmax(c.r, 0.0f);
-  c.g = fmax(c.g, 0.0f);
-  c.b = fmax(c.b, 0.0f);
-#endif
+  vct_clamp_sh_lanes(&c);
   return c;
 }
 
@@ -644,6 +649,106 @@ inline RgbaV vct_cone_levels_lanes(VoxelMipsV m, float3V o, float3V d, float tan
     }
     if (vct_all(done)) break;
   }
+  *occlusion = occ;
+  return c;
+}
+
+// The largest lane of v.
+#if GI_VW == 16
+inline int vct_max_lanes(int16 v) {
+  int8 a = max(v.lo, v.hi);
+  int4 b = max(a.lo, a.hi);
+  int2 c = max(b.lo, b.hi);
+  return max(c.x, c.y);
+}
+#elif GI_VW == 8
+inline int vct_max_lanes(int8 v) {
+  int4 b = max(v.lo, v.hi);
+  int2 c = max(b.lo, b.hi);
+  return max(c.x, c.y);
+}
+#else
+inline int vct_max_lanes(int v) { return v; }
+#endif
+
+// Composites a chunk's `count` samples in order: s[k] where sampled[k] and the lane is not yet
+// saturated, which is noted in *saturated (a ≥ 0.99).
+__attribute__((always_inline)) inline void vct_composite_chunk_lanes(RgbaV* s, intV* sampled, floatV* stepOverDiameter,
+                                                                     floatV* aoFalloff, int count, RgbaV* c,
+                                                                     floatV* occ, intV* saturated) {
+  for (int k = 0; k < count; ++k) {
+    vct_composite_lanes(s[k], sampled[k] && !*saturated, stepOverDiameter[k], aoFalloff[k], c, occ);
+    *saturated = *saturated || c->a >= 0.99f;
+  }
+}
+
+// vct_cone_levels (cone.h: each sample reads one level, the cone's diameter rounded up to a power
+// of two, in sub-steps of at most max(½, stepFactor·2^l) voxels) for GI_VW cones of their own
+// half-angles (the specular cones, vct.specular_steps=levels). Each lane walks its own sequence of
+// levels and sub-steps; a lookup reads one level per lane (vox_level_sample_lanes; lanes at level 0
+// read the isotropic level 0 (unless the voxels are directional), the others the directional
+// volumes of their levels, so a step whose lanes straddle both does both lookups) instead of the two levels of the
+// continuous march's quadrilinear lookups. As in vct_cone_levels_lanes, the lookups run in chunks
+// of VCT_LEVEL_CHUNK, then their compositing (a lane saturated in a chunk is masked from there
+// on). Each lane's samples and sums are those of vct_cone_levels. No empty-space skip: with
+// one-level lookups the map tests and extra stepping passes cost what the skipped lookups saved
+// (docs/PERFORMANCE.md, "Level-aligned specular cone").
+inline RgbaV vct_cone_levels_varying_lanes(VoxelMipsV m, float3V o, float3V d, floatV tanHalf, float maxDistance, float stepFactor, float aoLambda,
+                                           floatV* occlusion) {
+  RgbaV c;
+  c.r = c.g = c.b = c.a = (floatV)(0.0f);
+  floatV occ = (floatV)(0.0f);
+  intV left = (intV)(0), saturated = left;  // left: past the maximum distance or out of the grid
+  float limit = (float)m.N;
+  // Per lane: its level, diameter 2^level, the level's segment (tStart, tEnd], its sub-steps of
+  // length delta (the last ends at tEnd exactly), the sub-step j taken last, and its distance t.
+  floatV tUnit = 0.5f / tanHalf, diameter = (floatV)(1.0f);
+  intV level = (intV)(0);
+  floatV tEnd = diameter * tUnit, tStart = (floatV)(0.0f);
+  floatV steps = fmax(1.0f, ceil((tEnd - tStart) / fmax(0.5f, stepFactor * diameter)));
+  floatV delta = (tEnd - tStart) / steps, j = (floatV)(0.0f), t = (floatV)(0.0f), tPrevious = t;
+  float3V p;
+  RgbaV s[VCT_LEVEL_CHUNK];
+  intV sampledAt[VCT_LEVEL_CHUNK];
+  floatV stepOverDiameter[VCT_LEVEL_CHUNK], aoFalloff[VCT_LEVEL_CHUNK];
+  int count = 0;
+  while (!vct_all(left || saturated)) {
+    // The next sample of every lane not done: the next sub-step, or the first of the next level.
+    intV advance = !(left || saturated);
+    intV nextLevel = advance && j + 1.0f > steps;
+    if (GI_ANY(nextLevel)) {  // (most steps stay within the lanes' levels: no divisions)
+      level = GI_SEL(level, level + 1, nextLevel);
+      diameter = GI_SEL(diameter, 2.0f * diameter, nextLevel);
+      tEnd = GI_SEL(tEnd, diameter * tUnit, nextLevel);
+      tStart = GI_SEL(tStart, 0.5f * tEnd, nextLevel);
+      steps = GI_SEL(steps, fmax(1.0f, ceil((tEnd - tStart) / fmax(0.5f, stepFactor * diameter))), nextLevel);
+      delta = GI_SEL(delta, (tEnd - tStart) / steps, nextLevel);
+    }
+    j = GI_SEL(j, GI_SEL(j + 1.0f, (floatV)(1.0f), nextLevel), advance);
+    tPrevious = GI_SEL(tPrevious, t, advance);
+    t = GI_SEL(t, GI_SEL(tStart + j * delta, tEnd, j == steps), advance);
+    p = addV(o, scaleV(d, t));
+    floatV margin = 0.5f * diameter;
+    left = left || (advance && (t > maxDistance || p.x < -margin || p.y < -margin || p.z < -margin ||
+                                p.x > limit + margin || p.y > limit + margin || p.z > limit + margin));
+    intV sampled = !(left || saturated);
+    if (!GI_ANY(sampled)) break;
+    // Lanes that are done look up the highest level of a sampled lane (weight irrelevant: masked in
+    // the compositing), so that they add no lookup of a level no sampled lane needs.
+    intV lookupLevel = min(GI_SEL((intV)(vct_max_lanes(GI_SEL((intV)(0), level, sampled))), level, sampled),
+                           (intV)(m.levels - 1));
+    s[count].r = s[count].g = s[count].b = s[count].a = (floatV)(0.0f);
+    vox_level_sample_lanes(m, lookupLevel, p, d, (floatV)(1.0f), &s[count]);
+    vct_clamp_sh_lanes(&s[count]);
+    sampledAt[count] = sampled;
+    stepOverDiameter[count] = (t - tPrevious) / diameter;
+    aoFalloff[count] = 1.0f / (1.0f + aoLambda * t);
+    if (++count == VCT_LEVEL_CHUNK) {
+      vct_composite_chunk_lanes(s, sampledAt, stepOverDiameter, aoFalloff, count, &c, &occ, &saturated);
+      count = 0;
+    }
+  }
+  vct_composite_chunk_lanes(s, sampledAt, stepOverDiameter, aoFalloff, count, &c, &occ, &saturated);
   *occlusion = occ;
   return c;
 }

@@ -13,14 +13,17 @@
 // vct_specular  per pixel (a tile of GI_VW per work-item, cone_lanes.h): adds F_Schlick(F0, n·ωo) · L_cone
 //               along the mirror direction, the cone's half-angle from the GGX width, tan θ = α
 //               (α = roughness²). The BRDF's directional albedo is approximated by F(n·ωo) alone
-//               (no masking term). emptySpace: the empty-space map (voxel_light.cl), or null:
-//               steps whose lookups read only empty cells are stepped over without a lookup
+//               (no masking term). The march: level-aligned with sub-steps
+//               (vct_cone_levels_varying_lanes, tp.specularLevelSteps) or continuous (vct_cone_lanes;
+//               also with footprint in front). emptySpace: for the continuous march, the empty-space
+//               map (voxel_light.cl), or null: lookups that read only empty cells are left out
 //               (same result).
 // vct_bounce    per occupied voxel: its injected direct level-0 radiance plus ρ/π · E_indirect, the
 //               diffuse cones from the voxel's surface point along its normal through the current
 //               mips. Run k − 1 times (re-mipping in between) for k bounces: each run adds one more
 //               order of the light paths (L_k = L_direct + T·L_{k−1}).
-// vct_trace_cones  arbitrary cones (tests, debugging).
+// vct_trace_cones  arbitrary cones (tests, debugging), one at a time: the continuous march, or with
+//               specularLevelSteps the level-aligned one with sub-steps (vct_specular's references).
 // vct_irradiance_points  the one-cone-at-a-time march (cone.h) of the diffuse set at arbitrary
 //               points (tests: vct_diffuse's lanes against it).
 #include "common/brdf.h"
@@ -36,6 +39,7 @@ typedef struct {
   int applyAo;        // multiply the diffuse result by the voxel AO visibility
   int footprintInFront;  // keep the sampled footprint in front of the surface (cone.h)
   int levelSteps;        // diffuse cones: the level-aligned march (cone.h, vct_cone_levels)
+  int specularLevelSteps;  // specular cone (and vct_trace_cones): the level-aligned march with sub-steps
 } VctTraceParams;
 
 inline float3 vct_to_voxels(GiVoxelGrid g, float3 x) { return (x - vload3(0, g.origin)) / g.voxel_size; }
@@ -144,9 +148,12 @@ kernel void vct_specular(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, glob
   float3V p = f3v((px - origin.x) / grid.voxel_size, (py - origin.y) / grid.voxel_size,
                   (pz - origin.z) / grid.voxel_size);
   floatV occ;
-  RgbaV c = vct_cone_lanes(vox_mips_lanes(vct_mips(grid, tp, iso, aniso, sh, shAniso)), emptySpace,
-                           addV(p, scaleV(n, (floatV)(tp.startOffset))), r, tanHalf, tp.maxDistance, tp.stepFactor,
-                           tp.aoLambda, tp.footprintInFront ? tp.startOffset : INFINITY, dotV(r, n), &occ);
+  VoxelMipsV m = vox_mips_lanes(vct_mips(grid, tp, iso, aniso, sh, shAniso));
+  float3V o = addV(p, scaleV(n, (floatV)(tp.startOffset)));
+  RgbaV c = tp.specularLevelSteps && !tp.footprintInFront
+                ? vct_cone_levels_varying_lanes(m, o, r, tanHalf, tp.maxDistance, tp.stepFactor, tp.aoLambda, &occ)
+                : vct_cone_lanes(m, emptySpace, o, r, tanHalf, tp.maxDistance, tp.stepFactor, tp.aoLambda,
+                                 tp.footprintInFront ? tp.startOffset : INFINITY, dotV(r, n), &occ);
   // fresnel_schlick(F0, n·ωo) lane-wise
   floatV mm = clamp(1.0f - nv, 0.0f, 1.0f), m5 = mm * mm * mm * mm * mm;
   float vals[4][GI_VW];
@@ -185,8 +192,9 @@ kernel void vct_trace_cones(GiVoxelGrid grid, VctTraceParams tp, VCT_MIP_ARGS, g
   int i = get_global_id(0);
   if (i >= count) return;
   float4 c = cones[i], d = dirs[i];
-  ConeResult r = vct_cone(vct_mips(grid, tp, iso, aniso, sh, shAniso), c.xyz, d.xyz, c.w, d.w, tp.stepFactor,
-                          tp.aoLambda, INFINITY, 0.0f);
+  VoxelMips m = vct_mips(grid, tp, iso, aniso, sh, shAniso);
+  ConeResult r = tp.specularLevelSteps ? vct_cone_levels(m, c.xyz, d.xyz, c.w, d.w, tp.stepFactor, tp.aoLambda)
+                                       : vct_cone(m, c.xyz, d.xyz, c.w, d.w, tp.stepFactor, tp.aoLambda, INFINITY, 0.0f);
   out[i] = r.radiance;
   occlusion[i] = r.occlusion;
 }

@@ -25,9 +25,9 @@ VoxelScene::Directional directionalVoxels(const ParamSet& p) {
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
 struct VctTraceParams {
   float startOffset, maxDistance, stepFactor, aoLambda;
-  int32_t anisotropic, applyAo, footprintInFront, levelSteps;
+  int32_t anisotropic, applyAo, footprintInFront, levelSteps, specularLevelSteps;
 };
-static_assert(sizeof(VctTraceParams) == 32, "VctTraceParams layout");
+static_assert(sizeof(VctTraceParams) == 36, "VctTraceParams layout");
 
 class VctTechnique : public Technique {
 public:
@@ -82,6 +82,7 @@ public:
     tp.applyAo = p.getChoice("vct.ao") == "voxel" ? 1 : 0;
     tp.footprintInFront = p.getBool("vct.footprint_in_front") ? 1 : 0;
     tp.levelSteps = p.getChoice("vct.diffuse_steps") == "levels" ? 1 : 0;
+    tp.specularLevelSteps = p.getChoice("vct.specular_steps") == "levels" ? 1 : 0;
 
     if (!voxelized_ || !p.getBool("vct.static")) {
       voxels_->voxelize(f.deviceScene);
@@ -136,16 +137,19 @@ public:
       upsampler_->run(g, low_, down, t, indirect);
     }
     if (p.getBool("vct.specular")) {
-      // With anisotropic mips the specular march steps over the lookups the empty-space map shows
-      // empty (cone_lanes.h; the map depends on the occupancy bits only, voxel_scene.h). With
-      // isotropic mips a lookup reads one volume, not three, and the stepping passes cost what
-      // the skipped lookups save (docs/PERFORMANCE.md, *Specular cone: empty-space skip*): no map
-      // (a null buffer: the kernel skips nothing).
-      if (anisotropic && !emptySpaceBuilt_) {
+      // The continuous march with anisotropic mips steps over the lookups the empty-space map
+      // shows empty (cone_lanes.h; the map depends on the occupancy bits only, voxel_scene.h).
+      // With isotropic mips a lookup reads one volume, not three, and in the level-aligned march
+      // one level, not two: there the stepping passes cost what the skipped lookups save
+      // (docs/PERFORMANCE.md, *Specular cone: empty-space skip* and *Level-aligned specular
+      // cone*): no map (a null buffer: the kernel skips nothing), and none is built.
+      bool continuous = !tp.specularLevelSteps || tp.footprintInFront;
+      bool skipEmpty = anisotropic && continuous;
+      if (skipEmpty && !emptySpaceBuilt_) {
         voxels_->buildEmptySpace();
         emptySpaceBuilt_ = true;
       }
-      specular_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, anisotropic ? voxels_->emptySpace() : noMap_,
+      specular_.args(grid, tp, voxels_->iso(), aniso, shIso, shAniso, skipEmpty ? voxels_->emptySpace() : noMap_,
                      g.view, g.position, g.normal, g.specular, indirect);
       int tileW = vctLaneTileWidth(lanes_), tileH = lanes_ / tileW;
       int itemsX = (g.width + tileW - 1) / tileW, itemsY = (g.height + tileH - 1) / tileH;
@@ -191,6 +195,10 @@ TechniqueInfo vctTechniqueInfo() {
                         "diffuse cones: samples where the diameter is a power of two, one mip level each (levels), "
                         "or steps of step_factor diameters with quadrilinear lookups (continuous; also used with "
                         "footprint_in_front)");
+            p.addChoice("vct.specular_steps", "levels", {"levels", "continuous"},
+                        "specular cone: steps of at most step_factor diameters that read one mip level each, the "
+                        "cone's diameter rounded up to a power of two (levels), or quadrilinear lookups at the "
+                        "cone's diameter (continuous; also used with footprint_in_front)");
             p.addFloat("vct.max_distance", 1.0, 0.01, 2.0, "maximum cone length as a fraction of the grid edge");
             p.addBool("vct.specular", true, "trace one specular cone per pixel (aperture tan θ = GGX α)");
             p.addBool("vct.footprint_in_front", false,
