@@ -1240,8 +1240,12 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
   // vct_diffuse marches GI_VW pixels per work-item with one shared step schedule (cone_lanes.h);
   // it must give what the one-cone-at-a-time march (cone.h) gives at the same points, for every
   // voxel kind, mip filter, footprint mode and AO. A 37×5 "G-buffer" (37 is no multiple of the
-  // lane count) of random points and normals, every 7th pixel background; albedo π so that the
-  // output L = ρ/π·E is E.
+  // lane count), every 7th pixel background; albedo π so that the output L = ρ/π·E is E. Two
+  // layouts: random points and normals, where the lanes' lookups read different cells; and a
+  // surface, neighbouring pixels 0.06 voxels apart with normals near an axis (a different axis
+  // and sign every 4 columns) jittered by ±0.03, so that the lanes' stencils differ by at most a
+  // cell and their directions' near-zero components differ in sign: the lookups the lanes share
+  // (facing the same or opposite ways) and the window lookups (cone_lanes.h).
   cl::Context& ctx = test::context();
   Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
   VoxelScene vs(ctx, s, 32), vsDirectional(ctx, s, 32, VoxelScene::Directional::Plane);
@@ -1258,64 +1262,79 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
   const int W = 37, H = 5, count = W * H;
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
-  std::vector<glm::vec4> pos(count), nrm(count), albedo(count, glm::vec4(float(M_PI), float(M_PI), float(M_PI), 0));
-  for (int i = 0; i < count; ++i) {
-    glm::vec3 p = glm::vec3(g.origin[0], g.origin[1], g.origin[2]) +
-                  glm::vec3(2 + 28 * U(rng), 2 + 28 * U(rng), 2 + 28 * U(rng)) * g.voxel_size;
-    pos[i] = glm::vec4(p, i % 7 == 3 ? 0.0f : 1.0f);
-    nrm[i] = glm::vec4(glm::normalize(glm::vec3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f) + glm::vec3(1e-3f)), 0);
-  }
-  cl::Buffer bPos = ctx.upload(pos, "positions"), bNrm = ctx.upload(nrm, "normals"), bAlb = ctx.upload(albedo, "albedo");
+  std::vector<glm::vec4> albedo(count, glm::vec4(float(M_PI), float(M_PI), float(M_PI), 0));
+  cl::Buffer bAlb = ctx.upload(albedo, "albedo");
   cl::Buffer lanesOut(ctx, count * 16), scalarOut(ctx, count * 16);
-  // The device's lane count, and 1 (the GPU code path).
-  for (int lanes : {cl::gatherVectorWidth(ctx), 1}) {
-    // Voxel kinds: 0 isotropic, 1 SH, 2 directional (anisotropic mips only).
-    for (int kind = 0; kind < 3; ++kind) {
-      int sh = kind == 1, directional = kind == 2;
-      VoxelScene& v = directional ? vsDirectional : vs;
-      cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
-                                          {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"},
-                                           {"GI_VCT_DIRECTIONAL", directional ? "1" : "0"},
-                                           {"GI_VW", std::to_string(lanes)}});
-      cl::Kernel diffuse = prog.kernel("vct_diffuse"), points = prog.kernel("vct_irradiance_points");
-      for (int an = directional; an < 2; ++an) {
-        v.buildMips(an);
-        if (sh) v.buildShMips(an);
-        const cl::Buffer& aniso = an ? v.aniso() : v.iso();
-        const cl::Buffer& shIso = sh ? v.sh() : v.iso();
-        const cl::Buffer& shAniso = sh && an ? v.shAniso() : shIso;
-        for (int variant = 0; variant < 3; ++variant) {
-          TraceParams tp;
-          tp.startOffset = 1.0f;
-          tp.maxDistance = 32.0f;
-          tp.anisotropic = an;
-          tp.footprintInFront = variant == 1;  // variant 1: footprint in front and AO
-          tp.levelSteps = variant == 2;        // variant 2: the level-aligned march and AO
-          tp.applyAo = variant > 0;
-          tp.aoLambda = 0.1f;
-          diffuse.args(g, tp, v.iso(), aniso, shIso, shAniso, W, H, W, H, bPos, bNrm, bAlb, lanesOut);
-          int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
-          ctx.launch(diffuse, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8),
-                                              cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
-          points.args(g, tp, v.iso(), aniso, shIso, shAniso, bPos, bNrm, count, scalarOut);
-          ctx.launch(points, cl::NDRange::d1(cl::roundUp(count, 64), 64));
-          std::vector<glm::vec4> got = ctx.download<glm::vec4>(lanesOut), ref = ctx.download<glm::vec4>(scalarOut);
-          ctx.profiler().discard();
-          float worst = 0, largest = 0;
-          for (int i = 0; i < count; ++i) {
-            glm::vec3 expected = pos[i].w == 0 ? glm::vec3(0) : glm::vec3(ref[i]) * (tp.applyAo ? ref[i].w : 1.0f);
-            for (int c = 0; c < 3; ++c) {
-              worst = std::max(worst, std::abs(got[i][c] - expected[c]));
-              largest = std::max(largest, std::abs(expected[c]));
+  for (int surface = 0; surface < 2; ++surface) {
+    std::vector<glm::vec4> pos(count), nrm(count);
+    glm::vec3 origin(g.origin[0], g.origin[1], g.origin[2]);
+    for (int i = 0; i < count; ++i) {
+      glm::vec3 p, n;
+      if (surface) {
+        int u = i % W, v = i / W, axis = (u / 4) % 3;
+        p = origin + (glm::vec3(13.3f, 14.6f, 15.2f) + 0.06f * glm::vec3(u, v, u + v)) * g.voxel_size;
+        n = glm::vec3(U(rng), U(rng), U(rng)) * 0.06f - 0.03f;
+        n[axis] = (u / 12) % 2 ? -1.0f : 1.0f;
+      } else {
+        p = origin + glm::vec3(2 + 28 * U(rng), 2 + 28 * U(rng), 2 + 28 * U(rng)) * g.voxel_size;
+        n = glm::vec3(U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f) + glm::vec3(1e-3f);
+      }
+      pos[i] = glm::vec4(p, i % 7 == 3 ? 0.0f : 1.0f);
+      nrm[i] = glm::vec4(glm::normalize(n), 0);
+    }
+    cl::Buffer bPos = ctx.upload(pos, "positions"), bNrm = ctx.upload(nrm, "normals");
+    // The device's lane count, and 1 (the GPU code path).
+    for (int lanes : {cl::gatherVectorWidth(ctx), 1}) {
+      // Voxel kinds: 0 isotropic, 1 SH, 2 directional (anisotropic mips only).
+      for (int kind = 0; kind < 3; ++kind) {
+        int sh = kind == 1, directional = kind == 2;
+        VoxelScene& v = directional ? vsDirectional : vs;
+        cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
+                                            {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"},
+                                             {"GI_VCT_DIRECTIONAL", directional ? "1" : "0"},
+                                             {"GI_VW", std::to_string(lanes)}});
+        cl::Kernel diffuse = prog.kernel("vct_diffuse"), points = prog.kernel("vct_irradiance_points");
+        for (int an = directional; an < 2; ++an) {
+          v.buildMips(an);
+          if (sh) v.buildShMips(an);
+          const cl::Buffer& aniso = an ? v.aniso() : v.iso();
+          const cl::Buffer& shIso = sh ? v.sh() : v.iso();
+          const cl::Buffer& shAniso = sh && an ? v.shAniso() : shIso;
+          for (int variant = 0; variant < 3; ++variant) {
+            TraceParams tp;
+            tp.startOffset = 1.0f;
+            tp.maxDistance = 32.0f;
+            tp.anisotropic = an;
+            tp.footprintInFront = variant == 1;  // variant 1: footprint in front and AO
+            tp.levelSteps = variant == 2;        // variant 2: the level-aligned march and AO
+            tp.applyAo = variant > 0;
+            tp.aoLambda = 0.1f;
+            diffuse.args(g, tp, v.iso(), aniso, shIso, shAniso, W, H, W, H, bPos, bNrm, bAlb, lanesOut);
+            int tileW = vctLaneTileWidth(lanes), tileH = lanes / tileW;
+            ctx.launch(diffuse, cl::NDRange::d2(cl::roundUp((W + tileW - 1) / tileW, 8),
+                                                cl::roundUp((H + tileH - 1) / tileH, 8), 8, 8));
+            points.args(g, tp, v.iso(), aniso, shIso, shAniso, bPos, bNrm, count, scalarOut);
+            ctx.launch(points, cl::NDRange::d1(cl::roundUp(count, 64), 64));
+            std::vector<glm::vec4> got = ctx.download<glm::vec4>(lanesOut), ref = ctx.download<glm::vec4>(scalarOut);
+            ctx.profiler().discard();
+            float worst = 0, largest = 0;
+            for (int i = 0; i < count; ++i) {
+              glm::vec3 expected = pos[i].w == 0 ? glm::vec3(0) : glm::vec3(ref[i]) * (tp.applyAo ? ref[i].w : 1.0f);
+              for (int c = 0; c < 3; ++c) {
+                worst = std::max(worst, std::abs(got[i][c] - expected[c]));
+                largest = std::max(largest, std::abs(expected[c]));
+              }
             }
+            std::printf("diffuse cones, %s, %d lanes vs one cone at a time (%s voxels, %s mips, %s): max abs "
+                        "difference %.2e (largest %.3f)\n", surface ? "surface" : "random points", lanes,
+                        sh ? "SH" : directional ? "directional" : "isotropic", an ? "anisotropic" : "isotropic",
+                        variant == 0   ? "continuous march"
+                        : variant == 1 ? "footprint in front + AO"
+                                       : "level steps + AO",
+                        worst, largest);
+            EXPECT_GT(largest, 0.05f);
+            EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));
           }
-          std::printf("diffuse cones, %d lanes vs one cone at a time (%s voxels, %s mips, %s): max abs difference %.2e "
-                      "(largest %.3f)\n", lanes, sh ? "SH" : directional ? "directional" : "isotropic",
-                      an ? "anisotropic" : "isotropic",
-                      variant == 0 ? "continuous march" : variant == 1 ? "footprint in front + AO" : "level steps + AO",
-                      worst, largest);
-          EXPECT_GT(largest, 0.05f);
-          EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));
         }
       }
     }

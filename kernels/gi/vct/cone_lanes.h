@@ -146,7 +146,17 @@ __attribute__((always_inline)) inline void vct_pair_planes8_blend3(global const 
 // Whether every lane of a mask (0 / −1 per lane) is set, without branches: the lanes ANDed in
 // halves, then the sign. PoCL's all() on int16 tests the lanes two by two with a branch after
 // each pair, which costs mispredictions where the answer is data-dependent (shared stencils).
-#if GI_VW == 16
+#if GI_VW == 16 && defined(__AVX512DQ__) && defined(__has_builtin)
+#if __has_builtin(__builtin_ia32_cvtd2mask512)
+// With AVX-512 (x86 CPU devices): the lanes' signs as a 16-bit mask (one vpmovd2m, which the
+// compiler folds into the comparison that made m) against all ones.
+#define VCT_MASK_BITS(m) __builtin_ia32_cvtd2mask512(m)
+#endif
+#endif
+#ifdef VCT_MASK_BITS
+inline int vct_all(int16 m) { return VCT_MASK_BITS(m) == (ushort)0xffff; }
+inline int vct_any(int16 m) { return VCT_MASK_BITS(m) != (ushort)0; }
+#elif GI_VW == 16
 inline int vct_all(int16 m) {
   int8 a = m.lo & m.hi;
   int4 b = a.lo & a.hi;
@@ -168,6 +178,49 @@ inline int vct_all(int m) { return m != 0; }
 #define VCT_LANE0(v) (v)
 #else
 #define VCT_LANE0(v) ((v).s0)
+#endif
+
+// Window lookups (vox_level_sample_uniform_lanes): at 16 lanes on x86 CPUs with AVX-512
+// (VCT_MASK_BITS), a lookup whose lanes' stencils lie within a window of 4 records along x
+// and 2 rows along y and z per tap row loads the window's rows whole and picks each lane's element
+// with a two-source permute (vpermi2ps: 32 candidates, the y row in bit 4 of the index) and a
+// masked move (the z row). Same records as the per-lane gather, so the same bits.
+#ifdef VCT_MASK_BITS
+#if __has_builtin(__builtin_ia32_vpermi2varps512)
+#define VCT_WINDOW_LOOKUPS 1
+// The window's first index along an axis where lane 0 reads v0: v0 − 1 if some lane reads below
+// it, else v0 (then the window fits if every lane reads within 1 of it).
+inline int vct_window_start(int16 v, int v0) { return v0 - vct_any(v < (int16)(v0)); }
+
+// Element idx + c (c = 0..7: the tap pair's R0 G0 B0 A0 R1 G1 B1 A1) per lane of the rows at
+// p + o00 (y, z), p + o10 (y + 1, z), p + o01 (y, z + 1), p + o11 (y + 1, z + 1), 16 floats each;
+// idx = 4·(lane's x − window x) + 16·(lane's row is y + 1); zUpper: the lane's row is z + 1.
+__attribute__((always_inline)) inline void vct_window_pick(global const float* p, int o00, int o10, int o01, int o11,
+                                                           int16 idx, int16 zUpper, float16 out[8]) {
+  float16 r00 = vload16(0, p + o00), r10 = vload16(0, p + o10), r01 = vload16(0, p + o01), r11 = vload16(0, p + o11);
+#pragma unroll
+  for (int c = 0; c < 8; ++c) {
+    float16 lower = __builtin_ia32_vpermi2varps512(r00, idx + c, r10);
+    float16 upper = __builtin_ia32_vpermi2varps512(r01, idx + c, r11);
+    out[c] = select(lower, upper, zUpper);
+  }
+}
+
+// vct_window_pick of one axis's directional volume facing each lane's direction: plus where
+// `facing`, else minus; both are read only where the lanes face both ways.
+__attribute__((always_inline)) inline void vct_window_axis(global const float* plus, global const float* minus,
+                                                           int16 facing, int o00, int o10, int o01, int o11,
+                                                           int16 idx, int16 zUpper, float16 out[8]) {
+  int allPlus = vct_all(facing), allMinus = vct_all(~facing);
+  vct_window_pick(allMinus ? minus : plus, o00, o10, o01, o11, idx, zUpper, out);
+  if (!allPlus && !allMinus) {
+    float16 other[8];
+    vct_window_pick(minus, o00, o10, o01, o11, idx, zUpper, other);
+#pragma unroll
+    for (int c = 0; c < 8; ++c) out[c] = select(other[c], out[c], facing);
+  }
+}
+#endif
 #endif
 
 // VCT_GATHER_PAIR of the blend Σ_k w_k·pair(p_k + i_k) of three volumes (vct_pair_planes8_blend3).
@@ -352,6 +405,52 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
 #endif
 }
 
+#ifdef VCT_WINDOW_LOOKUPS
+// The rows of vox_level_sample_uniform_lanes by window lookups (VCT_WINDOW_LOOKUPS above), if
+// every lane's stencil fits the window (n ≥ 4: the 4 records from x fit in a row); returns whether
+// it did. chain + 4·(level6 + k·n3): directional volume k (directional), else the isotropic level
+// at chain + bx0.
+__attribute__((always_inline)) inline int vct_window_lookup(global const float* chain, int directional, int level6,
+                                                            int n3, int shift, int n, float3V d, floatV dx2,
+                                                            floatV dy2, floatV dz2, int bx0, const VctStencilV* st,
+                                                            RgbaV* acc) {
+  int x = clamp(vct_window_start(st->xs, st->xs.s0), 0, n - 4);
+  int y[2] = {vct_window_start(st->yr[0], st->yr[0].s0), vct_window_start(st->yr[1], st->yr[1].s0)};
+  int z[2] = {vct_window_start(st->zr[0], st->zr[0].s0), vct_window_start(st->zr[1], st->zr[1].s0)};
+  intV one = (intV)(1), dx = st->xs - x;
+  intV dy[2] = {st->yr[0] - y[0], st->yr[1] - y[1]}, dz[2] = {st->zr[0] - z[0], st->zr[1] - z[1]};
+  // (Unsigned: a lane below the window start wraps to a large value.)
+  if (!vct_all(as_uint16(dx) <= (uint16)(2) && as_uint16(dy[0]) <= (uint16)(1) && as_uint16(dy[1]) <= (uint16)(1) &&
+               as_uint16(dz[0]) <= (uint16)(1) && as_uint16(dz[1]) <= (uint16)(1)))
+    return 0;
+  intV ox4 = 4 * dx;
+#pragma unroll
+  for (int row = 0; row < 4; ++row) {
+    int yb = row & 1, zb = row >> 1;
+    int ya = y[yb], yc = min(ya + 1, n - 1), za = z[zb], zc = min(za + 1, n - 1);
+    int o00 = 4 * ((((za << shift) + ya) << shift) + x), o10 = 4 * ((((za << shift) + yc) << shift) + x);
+    int o01 = 4 * ((((zc << shift) + ya) << shift) + x), o11 = 4 * ((((zc << shift) + yc) << shift) + x);
+    intV idx = ox4 + (dy[yb] << 4), zUpper = dz[zb] == one;
+    floatV v[8];
+    if (directional) {
+      floatV vx[8], vy[8], vz[8];
+      global const float* p = chain + 4 * level6;
+      int minus = 4 * n3;
+      vct_window_axis(p, p + minus, d.x >= 0.0f, o00, o10, o01, o11, idx, zUpper, vx);
+      vct_window_axis(p + 2 * minus, p + 3 * minus, d.y >= 0.0f, o00, o10, o01, o11, idx, zUpper, vy);
+      vct_window_axis(p + 4 * minus, p + 5 * minus, d.z >= 0.0f, o00, o10, o01, o11, idx, zUpper, vz);
+#pragma unroll
+      for (int c = 0; c < 8; ++c) v[c] = dx2 * vx[c] + dy2 * vy[c] + dz2 * vz[c];
+    } else {
+      vct_window_pick(chain + bx0, o00, o10, o01, o11, idx, zUpper, v);
+    }
+    floatV w0 = st->wFirst * st->wy[yb] * st->wz[zb], w1 = st->wSecond * st->wy[yb] * st->wz[zb];
+    vct_add_pair(acc, w0, w1, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
+  }
+  return 1;
+}
+#endif
+
 // acc += level `level` (the same in every lane) seen along d, for the level-aligned march
 // (vct_cone_levels_lanes). Radiance voxels at an anisotropic level: the three directional volumes
 // facing d share one stencil, and a lookup is linear in the records, so Σ_axis d_axis²·trilinear(V_axis)
@@ -392,51 +491,63 @@ __attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelM
   int bx0 = VCT_LANE0(bx), by0 = VCT_LANE0(by), bz0 = VCT_LANE0(bz);
   // (Level 0 is left out: its 1-voxel cells are rarely shared, and the test costs more than it saves.)
   int sameBases = vct_all(bx == bx0 && by == by0 && bz == bz0);
-  int shared = level > 0 && sameBases &&
-               vct_all(xs == x0 && yr[0] == y0 && yr[1] == y1 && zr[0] == z0 && zr[1] == z1);
-#pragma unroll
-  for (int row = 0; row < 4; ++row) {
-    int yb = row & 1, zb = row >> 1;
-    floatV w0 = wFirst * wy[yb] * wz[zb], w1 = wSecond * wy[yb] * wz[zb];
-    floatV r0, g0, b0, a0, r1, g1, b1, a1;
-    if (shared) {
-      int idx0 = 4 * (((((zb ? z1 : z0) << shift) + (yb ? y1 : y0)) << shift) + x0);
-      // Scalar loads (not one vload8 per volume): each value then enters its multiply as a
-      // broadcast memory operand, with no shuffle to spread an element of a loaded vector.
-      global const float *px = chain + bx0 + idx0, *py = chain + by0 + idx0, *pz = chain + bz0 + idx0;
-      if (directional) {
-        r0 = dx2 * px[0] + dy2 * py[0] + dz2 * pz[0];
-        g0 = dx2 * px[1] + dy2 * py[1] + dz2 * pz[1];
-        b0 = dx2 * px[2] + dy2 * py[2] + dz2 * pz[2];
-        a0 = dx2 * px[3] + dy2 * py[3] + dz2 * pz[3];
-        r1 = dx2 * px[4] + dy2 * py[4] + dz2 * pz[4];
-        g1 = dx2 * px[5] + dy2 * py[5] + dz2 * pz[5];
-        b1 = dx2 * px[6] + dy2 * py[6] + dz2 * pz[6];
-        a1 = dx2 * px[7] + dy2 * py[7] + dz2 * pz[7];
-      } else {
-        r0 = (floatV)(px[0]);
-        g0 = (floatV)(px[1]);
-        b0 = (floatV)(px[2]);
-        a0 = (floatV)(px[3]);
-        r1 = (floatV)(px[4]);
-        g1 = (floatV)(px[5]);
-        b1 = (floatV)(px[6]);
-        a1 = (floatV)(px[7]);
-      }
-    } else {
-      intV idx = 4 * ((((zr[zb] << shift) + yr[yb]) << shift) + xs);
-      if (directional && sameBases) {
-        VCT_GATHER_PAIR_BLEND3(chain + bx0, chain + by0, chain + bz0, idx, idx, idx, dx2, dy2, dz2, r0, g0, b0, a0, r1,
-                               g1, b1, a1)
-      } else if (directional) {
-        VCT_GATHER_PAIR_BLEND3(chain, chain, chain, bx + idx, by + idx, bz + idx, dx2, dy2, dz2, r0, g0, b0, a0, r1,
-                               g1, b1, a1)
-      } else {
-        VCT_GATHER_PAIR(chain, bx + idx, r0, g0, b0, a0, r1, g1, b1, a1)
-      }
-    }
-    vct_add_pair(acc, w0, w1, r0, g0, b0, a0, r1, g1, b1, a1);
+  int sameStencil = level > 0 && vct_all(xs == x0 && yr[0] == y0 && yr[1] == y1 && zr[0] == z0 && zr[1] == z1);
+  int shared = sameStencil && sameBases;
+  // Lanes with the same stencil whose directions face opposite ways along some axis (an axis
+  // nearly in the surface's plane, whose sign the normal map flips from pixel to pixel: ≈ 1/6 of
+  // the lookups of levels ≥ 1 on Sponza) read both volumes of every axis once and pick per lane.
+  int sharedFacing = directional && sameStencil && !sameBases;
+  // One loop over the 4 rows per kind of lookup (not one test per row): the per-lane values only
+  // the gather needs are then prepared in its branch alone.
+#define VCT_ROWS(...)                                                       \
+  _Pragma("unroll") for (int row = 0; row < 4; ++row) {                     \
+    int yb = row & 1, zb = row >> 1;                                        \
+    floatV w0 = wFirst * wy[yb] * wz[zb], w1 = wSecond * wy[yb] * wz[zb];   \
+    floatV r0, g0, b0, a0, r1, g1, b1, a1;                                  \
+    int idx0 = 4 * (((((zb ? z1 : z0) << shift) + (yb ? y1 : y0)) << shift) + x0); \
+    intV idx = 4 * ((((zr[zb] << shift) + yr[yb]) << shift) + xs);         \
+    __VA_ARGS__                                                             \
+    vct_add_pair(acc, w0, w1, r0, g0, b0, a0, r1, g1, b1, a1);              \
   }
+  if (shared && directional) {
+    // Scalar loads (not one vload8 per volume): each value then enters its multiply as a
+    // broadcast memory operand, with no shuffle to spread an element of a loaded vector.
+    VCT_ROWS(global const float *px = chain + bx0 + idx0, *py = chain + by0 + idx0, *pz = chain + bz0 + idx0;
+             r0 = dx2 * px[0] + dy2 * py[0] + dz2 * pz[0]; g0 = dx2 * px[1] + dy2 * py[1] + dz2 * pz[1];
+             b0 = dx2 * px[2] + dy2 * py[2] + dz2 * pz[2]; a0 = dx2 * px[3] + dy2 * py[3] + dz2 * pz[3];
+             r1 = dx2 * px[4] + dy2 * py[4] + dz2 * pz[4]; g1 = dx2 * px[5] + dy2 * py[5] + dz2 * pz[5];
+             b1 = dx2 * px[6] + dy2 * py[6] + dz2 * pz[6]; a1 = dx2 * px[7] + dy2 * py[7] + dz2 * pz[7];)
+  } else if (shared) {
+    VCT_ROWS(global const float* px = chain + bx0 + idx0; r0 = (floatV)(px[0]); g0 = (floatV)(px[1]);
+             b0 = (floatV)(px[2]); a0 = (floatV)(px[3]); r1 = (floatV)(px[4]); g1 = (floatV)(px[5]);
+             b1 = (floatV)(px[6]); a1 = (floatV)(px[7]);)
+  } else if (sharedFacing) {
+    // Volume 2·axis (+) at q, 2·axis + 1 (−) at q + 4·n3: each lane's value is the one the gather
+    // would load, blended in the same order (same bits).
+    intV facingX = d.x >= 0.0f, facingY = d.y >= 0.0f, facingZ = d.z >= 0.0f;
+    int minus = 4 * n3;
+#define VCT_FACING(q, k, facing) GI_SEL((floatV)((q)[minus + (k)]), (floatV)((q)[k]), facing)
+#define VCT_BLEND_FACING(k) \
+  (dx2 * VCT_FACING(qx, k, facingX) + dy2 * VCT_FACING(qy, k, facingY) + dz2 * VCT_FACING(qz, k, facingZ))
+    VCT_ROWS(global const float *qx = chain + 4 * level6 + idx0, *qy = qx + 8 * n3, *qz = qy + 8 * n3;
+             r0 = VCT_BLEND_FACING(0); g0 = VCT_BLEND_FACING(1); b0 = VCT_BLEND_FACING(2);
+             a0 = VCT_BLEND_FACING(3); r1 = VCT_BLEND_FACING(4); g1 = VCT_BLEND_FACING(5);
+             b1 = VCT_BLEND_FACING(6); a1 = VCT_BLEND_FACING(7);)
+#undef VCT_BLEND_FACING
+#undef VCT_FACING
+#ifdef VCT_WINDOW_LOOKUPS
+  } else if (n >= 4 && vct_window_lookup(chain, directional, level6, n3, shift, n, d, dx2, dy2, dz2, bx0, &st, acc)) {
+#endif
+  } else if (directional && sameBases) {
+    VCT_ROWS(VCT_GATHER_PAIR_BLEND3(chain + bx0, chain + by0, chain + bz0, idx, idx, idx, dx2, dy2, dz2, r0, g0, b0,
+                                    a0, r1, g1, b1, a1))
+  } else if (directional) {
+    VCT_ROWS(VCT_GATHER_PAIR_BLEND3(chain, chain, chain, bx + idx, by + idx, bz + idx, dx2, dy2, dz2, r0, g0, b0, a0,
+                                    r1, g1, b1, a1))
+  } else {
+    VCT_ROWS(VCT_GATHER_PAIR(chain, bx + idx, r0, g0, b0, a0, r1, g1, b1, a1))
+  }
+#undef VCT_ROWS
 #endif
 }
 
@@ -489,20 +600,37 @@ inline floatV pow01V(floatV x, floatV r) {
   return p * as_floatV(convert_uintV(convert_intV(i) + 127) << 23);
 }
 
-// One front-to-back compositing step of the lanes where `sampled` (vct_cone's): the sample s with
-// its opacity corrected for the step, 1 − (1 − α)^(Δt/D) (stepOverDiameter = Δt/D), and the AO
-// occlusion weighted by aoFalloff = 1/(1 + λt).
-__attribute__((always_inline)) inline void vct_composite_lanes(RgbaV s, intV sampled, floatV stepOverDiameter,
-                                                               floatV aoFalloff, RgbaV* c, floatV* occ) {
-  intV live = sampled && s.a > 1e-6f;
+// The opacity of sample s corrected for the step, 1 − (1 − α)^(Δt/D) (stepOverDiameter = Δt/D),
+// and its ratio to s.a, the factor of the sample's premultiplied radiance: the part of a
+// compositing step that does not depend on what is in front (vct_composite_corrected_lanes).
+__attribute__((always_inline)) inline void vct_corrected_lanes(RgbaV s, floatV stepOverDiameter, floatV* corrected,
+                                                              floatV* perAlpha) {
   floatV alpha = fmin(s.a, 1.0f);
-  floatV corrected = 1.0f - pow01V(1.0f - alpha, stepOverDiameter);
-  floatV k = GI_SEL((floatV)(0.0f), (1.0f - c->a) * (corrected / s.a), live);
+  *corrected = 1.0f - pow01V(1.0f - alpha, stepOverDiameter);
+  *perAlpha = *corrected / s.a;
+}
+
+// The rest of the compositing step of the lanes where `sampled` (vct_composite_lanes).
+__attribute__((always_inline)) inline void vct_composite_corrected_lanes(RgbaV s, intV sampled, floatV corrected,
+                                                                        floatV perAlpha, floatV aoFalloff, RgbaV* c,
+                                                                        floatV* occ) {
+  intV live = sampled && s.a > 1e-6f;
+  floatV k = GI_SEL((floatV)(0.0f), (1.0f - c->a) * perAlpha, live);
   c->r += k * s.r;
   c->g += k * s.g;
   c->b += k * s.b;
   *occ += GI_SEL((floatV)(0.0f), (1.0f - *occ) * corrected * aoFalloff, live);
   c->a += GI_SEL((floatV)(0.0f), (1.0f - c->a) * corrected, live);
+}
+
+// One front-to-back compositing step of the lanes where `sampled` (vct_cone's): the sample s with
+// its opacity corrected for the step, 1 − (1 − α)^(Δt/D) (stepOverDiameter = Δt/D), and the AO
+// occlusion weighted by aoFalloff = 1/(1 + λt).
+__attribute__((always_inline)) inline void vct_composite_lanes(RgbaV s, intV sampled, floatV stepOverDiameter,
+                                                               floatV aoFalloff, RgbaV* c, floatV* occ) {
+  floatV corrected, perAlpha;
+  vct_corrected_lanes(s, stepOverDiameter, &corrected, &perAlpha);
+  vct_composite_corrected_lanes(s, sampled, corrected, perAlpha, aoFalloff, c, occ);
 }
 
 // vct_footprint lane-wise; the largest power of two ≤ the bound by clearing its mantissa.
@@ -642,9 +770,14 @@ inline RgbaV vct_cone_levels_lanes(VoxelMipsV m, float3V o, float3V d, float tan
       stepOverDiameter[count] = step / diameter;
       aoFalloff[count] = 1.0f / (1.0f + aoLambda * t);
     }
+    // The corrected opacities of the chunk's samples first (independent of each other: their
+    // long chains of log2, exp2 and divisions overlap), then the dependent compositing.
+    floatV corrected[VCT_LEVEL_CHUNK], perAlpha[VCT_LEVEL_CHUNK];
+    for (int k = 0; k < count; ++k)
+      vct_corrected_lanes(s[k], (floatV)(stepOverDiameter[k]), &corrected[k], &perAlpha[k]);
     for (int k = 0; k < count; ++k) {
       done = done || doneAt[k];
-      vct_composite_lanes(s[k], !done, (floatV)(stepOverDiameter[k]), (floatV)(aoFalloff[k]), &c, &occ);
+      vct_composite_corrected_lanes(s[k], !done, corrected[k], perAlpha[k], (floatV)(aoFalloff[k]), &c, &occ);
       done = done || c.a >= 0.99f;
     }
     if (vct_all(done)) break;
