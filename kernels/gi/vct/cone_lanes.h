@@ -761,11 +761,7 @@ inline RgbaV vct_cone_levels_lanes(VoxelMipsV m, float3V o, float3V d, float tan
       }
       s[count].r = s[count].g = s[count].b = s[count].a = (floatV)(0.0f);
       vox_level_sample_uniform_lanes(m, min(level, m.levels - 1), p, d, &s[count]);
-#if GI_VCT_SH
-      s[count].r = fmax(s[count].r, 0.0f);
-      s[count].g = fmax(s[count].g, 0.0f);
-      s[count].b = fmax(s[count].b, 0.0f);
-#endif
+      vct_clamp_sh_lanes(&s[count]);
       doneAt[count] = left;
       stepOverDiameter[count] = step / diameter;
       aoFalloff[count] = 1.0f / (1.0f + aoLambda * t);
