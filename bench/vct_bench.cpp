@@ -39,9 +39,11 @@ int main(int argc, char** argv) {
                 "specular cone <= 10 ms\n");
     for (int res : {32, 64, 128, 256})
       std::printf("memory %3d^3: isotropic %7.1f MB, anisotropic %7.1f MB; SH voxels: isotropic %7.1f MB, "
-                  "anisotropic %7.1f MB; directional voxels %7.1f MB\n", res, VoxelScene::bytesFor(res, false) / 1e6,
+                  "anisotropic %7.1f MB; directional voxels %7.1f MB; + continuous specular march's empty-space map "
+                  "%5.1f MB\n", res, VoxelScene::bytesFor(res, false) / 1e6,
                   VoxelScene::bytesFor(res, true) / 1e6, VoxelScene::bytesFor(res, false, true) / 1e6,
-                  VoxelScene::bytesFor(res, true, true) / 1e6, VoxelScene::bytesFor(res, true, false, true) / 1e6);
+                  VoxelScene::bytesFor(res, true, true) / 1e6, VoxelScene::bytesFor(res, true, false, true) / 1e6,
+                  VoxelScene::emptySpaceBytesFor(res) / 1e6);
     if (args.only == "voxelize") {
       // The lanes kernel and the trianglewise reference alternately, frame by frame, so that both
       // see the same machine load.

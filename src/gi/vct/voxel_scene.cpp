@@ -47,6 +47,18 @@ uint64_t VoxelScene::bytesFor(int resolution, bool anisotropic, bool sh, bool di
   return bytes;
 }
 
+// One byte per cell of every level (the map), and one per cell of levels >= 1 (occupied levels).
+static uint64_t emptySpaceMapCells(int resolution) {
+  uint64_t n = uint64_t(resolution) * resolution * resolution, cells = 0;
+  for (int l = 0; (resolution >> l) > 0; ++l) cells += n >> (3 * l);
+  return cells;
+}
+
+uint64_t VoxelScene::emptySpaceBytesFor(int resolution) {
+  uint64_t n = uint64_t(resolution) * resolution * resolution;
+  return 2 * emptySpaceMapCells(resolution) - n;
+}
+
 uint64_t VoxelScene::anisoBytes() const {
   uint64_t bytes = 0;
   for (int l = directional() ? 0 : 1; l < grid_.levels; ++l) bytes += 6 * (voxelCount() >> (3 * l)) * 16;
@@ -183,10 +195,9 @@ void VoxelScene::buildMips(bool anisotropic) {
 
 void VoxelScene::buildEmptySpace() {
   int N = grid_.resolution;
-  uint64_t n = voxelCount(), cells = 0;
-  for (int l = 0; l < grid_.levels; ++l) cells += n >> (3 * l);
+  uint64_t n = voxelCount(), cells = emptySpaceMapCells(N);
   if (!emptySpace_) {
-    ctx_.requireAllocation(2 * cells - n, "vct empty-space map (vct.resolution)");
+    ctx_.requireAllocation(emptySpaceBytesFor(N), "vct empty-space map (vct.resolution)");
     emptySpace_ = cl::Buffer(ctx_, cells, CL_MEM_READ_WRITE, "vct empty-space map");
     occupiedLevels_ = cl::Buffer(ctx_, std::max<uint64_t>(cells - n, 1), CL_MEM_READ_WRITE, "vct occupied levels");
   }

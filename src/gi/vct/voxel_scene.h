@@ -83,7 +83,10 @@ public:
   uint64_t bytes() const { return acc_.bytes() + occupied_.bytes() + occupancy_.bytes() + spanCounts_.bytes() + iso_.bytes() + aniso_.bytes() + sh_.bytes() + shAniso_.bytes() + emptySpace_.bytes() + occupiedLevels_.bytes() + triangleSetup_.bytes() + columnStart_.bytes(); }
   // Device memory of a configuration: accumulators + isotropic chain (+ directional volumes)
   // (+ SH coefficients of the chains used).
+  // Not counted there: the triangle setup of the voxelization (scene-dependent) and the empty-space
+  // map, built only for the continuous specular march with anisotropic mips (emptySpaceBytesFor).
   static uint64_t bytesFor(int resolution, bool anisotropic, bool sh = false, bool directional = false);
+  static uint64_t emptySpaceBytesFor(int resolution);  // the map and its occupied-levels scratch
 
   // Every chain (iso_, aniso_ and their SH copies) ends with this many zero records: the cone march
   // reads the tap pair along x as two adjacent records, which for the last (1-voxel) volume reaches
