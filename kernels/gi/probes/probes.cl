@@ -290,6 +290,16 @@ __attribute__((always_inline)) inline ProbeBilinearV probe_bilinear_weightsV(flo
   return q;
 }
 
+// What a probe's weight needs (probe_sightV, then the distance passes, then probe_sight_weightV):
+// the probe's distance footprint (texel offset i00 of its top-left tap, into the whole map array
+// or the probe's map, and the bilinear fractions tx, ty), the trilinear weight × active flag w,
+// the backface term, the distance r from the probe to the biased point and the bilinear distance
+// moments (mean, mean²) there.
+typedef struct {
+  intV i00;
+  floatV tx, ty, w, backface, r, mean, mean2;
+} ProbeSightV;
+
 #if GI_VW > 1
 // The smallest of the lanes' values.
 inline int probe_lane_min(intV v) {
@@ -302,13 +312,6 @@ inline int probe_lane_min(intV v) {
   int2 c = min(b.lo, b.hi);
   return min(c.x, c.y);
 }
-
-// The smallest key among the lanes set in `pending`, INT_MAX when none is (keys are texel offsets
-// and cell indices, far below INT_MAX). The pass loops take the lanes key by key with it: one
-// lane reduction per pass both finds the next key and ends the loop (PoCL turns any() and all()
-// of 16 lanes into a chain of per-lane tests and branches, so a separate test through the
-// minimum cost a second reduction per pass).
-inline int probe_next_key(intV keys, intV pending) { return probe_lane_min(GI_SEL((intV)(INT_MAX), keys, pending)); }
 
 // Whether any lane of a mask (lanes −1 or 0) is set. With AVX-512 the lanes' sign bits as a mask
 // register (vpmovd2m), one instruction; elsewhere the lane minimum.
@@ -325,44 +328,86 @@ inline int probe_lane_any(intV m) {
 #endif
 }
 
-// Bilinear (mean, mean²) of one probe's distance map (float2 texels) at the lanes' footprints
-// i00 with weights q, for the lanes set in `lanes`. The directions from one probe to a
-// work-item's adjacent pixels usually fall in one or two texels (a distance texel spans 2/res of
-// the octahedron): one pass per different footprint, its four records read as scalars. The first
-// two passes take the footprints of the first and the last lane of `lanes` (firstLane, lastLane:
-// opposite corners of the tile, or of its part in this cell pass), unconditionally, even when
-// they are the same footprint: no lane reduction and no branch on the footprints, which cost
-// more than a redundant pass (before: the smallest and largest footprint from two reductions,
-// the second pass a branch on them). Lanes with a third footprint or more are taken in a loop,
-// one reduction per pass; its branch is rare with the corners of the cell pass's own lanes
-// (with lanes 0 and GI_VW − 1 whatever the cell, the loop ran often: it cost ≈ 14 % of the
-// shading, against ≈ 4 % now; docs/PERFORMANCE.md, "probes: G-buffer prefetch, distance passes").
-__attribute__((always_inline)) inline void probe_distance_sharedV(global const float* map, intV i00, intV lanes,
-                                                                  int firstLane, int lastLane, int side,
-                                                                  ProbeBilinearV q, floatV* mean, floatV* mean2) {
-  floatV m = (floatV)(0.0f), m2 = m;
-#define PROBE_DISTANCE_PASS(o)                                                                                  \
-  {                                                                                                             \
-    intV these = i00 == (o);                                                                                    \
-    global const float* t = map + 2 * (o);                                                                      \
-    m = GI_SEL(m, q.w00 * t[0] + q.w10 * t[2] + q.w01 * t[2 * side] + q.w11 * t[2 * side + 2], these);         \
-    m2 = GI_SEL(m2, q.w00 * t[1] + q.w10 * t[3] + q.w01 * t[2 * side + 1] + q.w11 * t[2 * side + 3], these);   \
-  }
-  int keys[GI_VW];
-  vstoreV(i00, 0, keys);
-  int first = keys[firstLane], last = keys[lastLane];
-  PROBE_DISTANCE_PASS(first)
-  PROBE_DISTANCE_PASS(last)
-  intV pending = lanes & (i00 != first) & (i00 != last);
-  if (probe_lane_any(pending))
-    for (int o = probe_next_key(i00, pending); o != INT_MAX; o = probe_next_key(i00, pending)) {
-      PROBE_DISTANCE_PASS(o)
-      pending &= i00 != o;
-    }
-#undef PROBE_DISTANCE_PASS
-  *mean = m;
-  *mean2 = m2;
+// Lane l of v (l varies). With AVX-512 one lane permutation (vpermd) of v by a vector of l; elsewhere
+// v through a private array. (Through the array with AVX-512, a 64-byte vector stored in 16-byte
+// parts and a 4-byte load of one of them, the distance passes' key reads cost ≈ 8 % of the shading:
+// docs/PERFORMANCE.md, "probes: lane extraction by permutation".)
+#if defined(PROBE_MASK_BITS) && __has_builtin(__builtin_ia32_permvarsi512)
+#define PROBE_LANE_PERMUTE
+inline int probe_lane(intV v, int l) { return __builtin_ia32_permvarsi512(v, (intV)(l))[0]; }
+#else
+inline int probe_lane(intV v, int l) {
+  int lanes[GI_VW];
+  vstoreV(v, 0, lanes);
+  return lanes[l];
 }
+#endif
+
+// The key of a lane set in `pending`, INT_MAX when none is (keys are texel offsets and cell
+// indices, far below INT_MAX): with AVX-512 the first such lane's (mask bits, tzcnt, one lane
+// permutation), elsewhere the smallest (a lane reduction). The pass loops take the lanes key by
+// key with it: one call per pass both finds the next key and ends the loop (PoCL turns any() and
+// all() of 16 lanes into a chain of per-lane tests and branches). Each lane's result depends only
+// on its own key, so the order of the passes does not change it.
+#ifdef PROBE_LANE_PERMUTE
+inline int probe_next_key(intV keys, intV pending) {
+  int bits = PROBE_MASK_BITS(pending);
+  return bits ? probe_lane(keys, __builtin_ctz((uint)bits)) : INT_MAX;
+}
+// The first and the last lane set in a mask that has one.
+inline int probe_first_lane(intV m) { return __builtin_ctz((uint)PROBE_MASK_BITS(m)); }
+inline int probe_last_lane(intV m) { return 31 - __builtin_clz((uint)PROBE_MASK_BITS(m)); }
+#else
+inline int probe_next_key(intV keys, intV pending) { return probe_lane_min(GI_SEL((intV)(INT_MAX), keys, pending)); }
+inline int probe_first_lane(intV m) { return probe_next_key((intV)(GI_LANES), m); }
+inline int probe_last_lane(intV m) { return -probe_next_key(-(intV)(GI_LANES), m); }
+#endif
+
+// PROBE_DISTANCE_PASS(s, q, map, side, o): the lanes of sight s whose distance footprint is texel
+// offset o take the bilinear (mean, mean²) with weights q from the four float2 records there, read
+// as scalars.
+#define PROBE_DISTANCE_PASS(s, q, map, side, o)                                                                    \
+  {                                                                                                             \
+    intV these = (s).i00 == (o);                                                                                \
+    global const float* t = (map) + 2 * (o);                                                                    \
+    (s).mean = GI_SEL((s).mean, (q).w00 * t[0] + (q).w10 * t[2] + (q).w01 * t[2 * (side)] +                    \
+                                    (q).w11 * t[2 * (side) + 2], these);                                        \
+    (s).mean2 = GI_SEL((s).mean2, (q).w00 * t[1] + (q).w10 * t[3] + (q).w01 * t[2 * (side) + 1] +              \
+                                      (q).w11 * t[2 * (side) + 3], these);                                      \
+  }
+
+// Bilinear (mean, mean²) of one probe's distance map (float2 texels) at the lanes' footprints
+// s->i00, for the lanes set in `lanes`. The directions from one probe to a work-item's adjacent
+// pixels usually fall in one or two texels (a distance texel spans 2/res of the octahedron): one
+// pass per different footprint, its four records read as scalars. The first two passes take the
+// footprints of the first and the last lane of `lanes` (firstLane, lastLane: opposite corners of
+// the tile, or of its part in this cell pass), unconditionally, even when they are the same
+// footprint: no lane reduction and no branch on the footprints, which cost more than a redundant
+// pass (Sponza 640×360: the two are the same in 76 % of the calls). Returns the lanes with a third
+// footprint or more (12 % of the calls), for probe_distance_restV, which the caller runs after all
+// 8 probes of the cell: the 8 probes' weights are then one block of code without branches (with
+// the loop inside each probe's code the shading took 3 % more CPU time; docs/PERFORMANCE.md).
+__attribute__((always_inline)) inline intV probe_distance_cornersV(global const float* map, ProbeSightV* s, intV lanes,
+                                                                   int firstLane, int lastLane, int side) {
+  int first = probe_lane(s->i00, firstLane), last = probe_lane(s->i00, lastLane);
+  ProbeBilinearV q = probe_bilinear_weightsV(s->tx, s->ty);
+  s->mean = s->mean2 = (floatV)(0.0f);
+  PROBE_DISTANCE_PASS(*s, q, map, side, first)
+  PROBE_DISTANCE_PASS(*s, q, map, side, last)
+  return lanes & (s->i00 != first) & (s->i00 != last);
+}
+
+// The lanes `pending` of probe_distance_cornersV: one pass per further footprint, one lane
+// reduction each.
+__attribute__((always_inline)) inline void probe_distance_restV(global const float* map, ProbeSightV* s, intV pending,
+                                                                int side) {
+  ProbeBilinearV q = probe_bilinear_weightsV(s->tx, s->ty);
+  for (int o = probe_next_key(s->i00, pending); o != INT_MAX; o = probe_next_key(s->i00, pending)) {
+    PROBE_DISTANCE_PASS(*s, q, map, side, o)
+    pending &= s->i00 != o;
+  }
+}
+#undef PROBE_DISTANCE_PASS
 #else
 // One pixel per work-item: the distance map's four taps at texel offset i00 (a row's two taps
 // one 128-bit record).
@@ -391,39 +436,37 @@ typedef struct {
   floatV Ex, Ey, Ez, wsum;
 } ProbeBlendV;
 
-// The weight of one probe: trilinear weight w (times the probe's active flag) × the crushed
-// backface term × Chebyshev visibility from the probe's relocated position pp and its distance
-// map distMap (for the lanes set in `lanes`; one pixel per work-item: the whole map array, the
-// probe's map at texel offset distBase).
-__attribute__((always_inline)) inline floatV probe_weightV(const GiProbeGrid* g, const ProbeBlendV* b, floatV w,
-                                                           floatV ppx, floatV ppy, floatV ppz,
-                                                           global const float* distMap, intV distBase, intV lanes,
-                                                           int firstLane, int lastLane) {
-  int dres = g->distance_res, dside = dres + 2;
+// One probe's weight, part 1: from its relocated position pp, with w its trilinear weight times
+// its active flag, the backface term, the distance to the biased point and the distance map
+// footprint of the direction to it (texel offset distBase + the footprint's).
+__attribute__((always_inline)) inline ProbeSightV probe_sightV(const GiProbeGrid* g, const ProbeBlendV* b, floatV w,
+                                                               floatV ppx, floatV ppy, floatV ppz, intV distBase) {
+  ProbeSightV s;
   floatV tpx = ppx - b->x.x, tpy = ppy - b->x.y, tpz = ppz - b->x.z;
   floatV len = sqrt(tpx * tpx + tpy * tpy + tpz * tpz);
   floatV cosine = (b->n.x * tpx + b->n.y * tpy + b->n.z * tpz) / len;
-  floatV backface = GI_SEL((floatV)(1.0f), PROBE_BACKFACE_WEIGHT(g, cosine), len > 0.0f);
+  s.w = w;
+  s.backface = GI_SEL((floatV)(1.0f), PROBE_BACKFACE_WEIGHT(g, cosine), len > 0.0f);
   floatV fpx = b->xb.x - ppx, fpy = b->xb.y - ppy, fpz = b->xb.z - ppz;
-  floatV r = sqrt(fpx * fpx + fpy * fpy + fpz * fpz);
-  intV far = r > 0.0f;
+  s.r = sqrt(fpx * fpx + fpy * fpy + fpz * fpz);
+  intV far = s.r > 0.0f;
   intV distOffset;
-  floatV dtx, dty, mean, mean2;
-  probe_octahedral_footprintV(GI_SEL(b->n.x, fpx, far), GI_SEL(b->n.y, fpy, far), GI_SEL(b->n.z, fpz, far), dres,
-                              &distOffset, &dtx, &dty);
-  ProbeBilinearV q = probe_bilinear_weightsV(dtx, dty);
-#if GI_VW > 1
-  probe_distance_sharedV(distMap, distBase + distOffset, lanes, firstLane, lastLane, dside, q, &mean, &mean2);
-#else
-  probe_distance_pixelV(distMap, distBase + distOffset, dside, q, &mean, &mean2);
-#endif
-  floatV variance = fabs(mean2 - mean * mean), d = r - mean;
+  probe_octahedral_footprintV(GI_SEL(b->n.x, fpx, far), GI_SEL(b->n.y, fpy, far), GI_SEL(b->n.z, fpz, far),
+                              g->distance_res, &distOffset, &s.tx, &s.ty);
+  s.i00 = distBase + distOffset;
+  return s;
+}
+
+// One probe's weight, part 2, once s's distance moments are read: w × the crushed backface term ×
+// Chebyshev visibility.
+__attribute__((always_inline)) inline floatV probe_sight_weightV(const ProbeSightV* s) {
+  floatV mean = s->mean, variance = fabs(s->mean2 - mean * mean), d = s->r - mean;
   floatV cheb = variance / fmax(variance + d * d, 1e-30f), v = (floatV)(1.0f);
 #pragma unroll
   for (int k = 0; k < GI_PROBE_CHEBYSHEV_POWER; ++k) v *= cheb;
-  floatV visible = backface * GI_SEL((floatV)(1.0f), v, r > mean);
+  floatV visible = s->backface * GI_SEL((floatV)(1.0f), v, s->r > mean);
   PROBE_CRUSH_WEIGHT(visible)
-  return w * visible;
+  return s->w * visible;
 }
 
 #if GI_VW > 1
@@ -479,10 +522,12 @@ __attribute__((always_inline)) inline void probe_cell_sharedV(const GiProbeGrid*
   int iside = g->irradiance_res + 2, dside = g->distance_res + 2;
   int irrTexels = iside * iside, distTexels = dside * dside;
   floatV weight[8];
+  ProbeSightV sight[8];
+  intV rest[8];
   global const float* irrMaps[8];
-  b->wsum = (floatV)(0.0f);
+  global const float* distMaps[8];
   // The first and the last lane of this cell pass (once per pass; the distance lookups start there).
-  int firstLane = probe_next_key((intV)(GI_LANES), lanes), lastLane = -probe_next_key(-(intV)(GI_LANES), lanes);
+  int firstLane = probe_first_lane(lanes), lastLane = probe_last_lane(lanes);
 #pragma unroll
   for (int c = 0; c < 8; ++c) {
     int offx = c & 1, offy = (c >> 1) & 1, offz = c >> 2;
@@ -491,12 +536,25 @@ __attribute__((always_inline)) inline void probe_cell_sharedV(const GiProbeGrid*
     int probe = (piz * cy + piy) * cx + pix;
     float4 state = vload4(probe, probeStates);  // relocation offset, active flag
     w *= state.w;
-    weight[c] = probe_weightV(g, b, w, (floatV)(ox + (float)pix * sx + state.x), (floatV)(oy + (float)piy * sy + state.y),
-                              (floatV)(oz + (float)piz * sz + state.z), distance + (size_t)probe * distTexels * 2,
-                              (intV)(0), lanes, firstLane, lastLane);
-    b->wsum += weight[c];
+    distMaps[c] = distance + (size_t)probe * distTexels * 2;
+    sight[c] = probe_sightV(g, b, w, (floatV)(ox + (float)pix * sx + state.x), (floatV)(oy + (float)piy * sy + state.y),
+                            (floatV)(oz + (float)piz * sz + state.z), (intV)(0));
+    rest[c] = probe_distance_cornersV(distMaps[c], &sight[c], lanes, firstLane, lastLane, dside);
+    weight[c] = probe_sight_weightV(&sight[c]);
     irrMaps[c] = irradiance + (size_t)probe * irrTexels * 4;
   }
+  // The probes with lanes in a third distance footprint or more: their further passes and weights
+  // (unrolled: as a loop over c, sight[] indexed at run time, the shading took 9 % more CPU time;
+  // one test of all 8 probes' lanes before these 8 took 15 % more).
+#pragma unroll
+  for (int c = 0; c < 8; ++c)
+    if (probe_lane_any(rest[c])) {
+      probe_distance_restV(distMaps[c], &sight[c], rest[c], dside);
+      weight[c] = probe_sight_weightV(&sight[c]);
+    }
+  b->wsum = (floatV)(0.0f);
+#pragma unroll
+  for (int c = 0; c < 8; ++c) b->wsum += weight[c];
   float3V e = f3v((floatV)(0.0f), (floatV)(0.0f), (floatV)(0.0f));
   intV pending = lanes;
   for (int o = probe_next_key(b->irrOffset, pending); o != INT_MAX; o = probe_next_key(b->irrOffset, pending)) {
@@ -543,8 +601,12 @@ __attribute__((always_inline)) inline void probe_cell_pixelV(const GiProbeGrid* 
     floatV movedX, movedY, movedZ, active;  // the probe's state: relocation offset, active flag
     GI_GATHER_AOS4(float, probeStates, probe, movedX, movedY, movedZ, active)
     w *= active;
-    w = probe_weightV(g, b, w, ox + convert_floatV(pix) * sx + movedX, oy + convert_floatV(piy) * sy + movedY,
-                      oz + convert_floatV(piz) * sz + movedZ, distance, probe * distTexels, (intV)(-1), 0, 0);
+    ProbeSightV sight = probe_sightV(g, b, w, ox + convert_floatV(pix) * sx + movedX,
+                                     oy + convert_floatV(piy) * sy + movedY, oz + convert_floatV(piz) * sz + movedZ,
+                                     probe * distTexels);
+    probe_distance_pixelV(distance, sight.i00, dside, probe_bilinear_weightsV(sight.tx, sight.ty), &sight.mean,
+                          &sight.mean2);
+    w = probe_sight_weightV(&sight);
     b->wsum += w;
     float3V e = probe_irradiance_pixelV(irradiance, probe * irrTexels + b->irrOffset, iside, b->irrTaps, w);
     b->Ex += e.x;
@@ -722,18 +784,27 @@ kernel void probe_shade(GiProbeGrid grid, global const float4* irradiance, globa
   }
   intV surface = pw != 0.0f;
   floatV zero = (floatV)(0.0f);
-  float tmp[4 * GI_VW];
   floatV ox = GI_SEL(zero, E.x, surface), oy = GI_SEL(zero, E.y, surface), oz = GI_SEL(zero, E.z, surface);
-  GI_AOS4_STORE(tmp, ox, oy, oz, zero)
 #if GI_VW > 1
-  // A whole tile: each of its rows is 4 · tileW contiguous floats of tmp and of the image.
+  // A whole tile: lanes 4k … 4k + 3 are 4 adjacent pixels of a tile row, one 16-float store each
+  // (through a private array first, the stores and reloads cost more: docs/PERFORMANCE.md).
   if (fullTile) {
-    for (int r = 0; r < tileH; ++r)
-      for (int k = 0; k < tileW / 4; ++k)
-        vstore16(vload16(r * (tileW / 4) + k, tmp), k, (global float*)(out + (size_t)(v0 + r) * lw + u0));
+#define PROBE_STORE4(k, a, b, c, d)                                                                         \
+  vstore16((float16)(ox.a, oy.a, oz.a, zero.a, ox.b, oy.b, oz.b, zero.b, ox.c, oy.c, oz.c, zero.c, ox.d, oy.d, \
+                     oz.d, zero.d),                                                                         \
+           0, (global float*)(out + (size_t)(v0 + ((4 * (k)) >> shift)) * lw + u0 + ((4 * (k)) & (tileW - 1))));
+    PROBE_STORE4(0, s0, s1, s2, s3)
+    PROBE_STORE4(1, s4, s5, s6, s7)
+#if GI_VW == 16
+    PROBE_STORE4(2, s8, s9, sa, sb)
+    PROBE_STORE4(3, sc, sd, se, sf)
+#endif
+#undef PROBE_STORE4
     return;
   }
 #endif
+  float tmp[4 * GI_VW];
+  GI_AOS4_STORE(tmp, ox, oy, oz, zero)
   for (int l = 0; l < GI_VW; ++l) {
     int ul = u0 + (l & (tileW - 1)), vl = v0 + (l >> shift);
     if (ul < lw && vl < lh) out[(size_t)vl * lw + ul] = vload4(l, tmp);
