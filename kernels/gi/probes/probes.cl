@@ -330,10 +330,15 @@ inline int probe_lane_any(intV m) {
 
 // Lane l of v (l varies). With AVX-512 one lane permutation (vpermd) of v by a vector of l; elsewhere
 // v through a private array. (Through the array with AVX-512, a 64-byte vector stored in 16-byte
-// parts and a 4-byte load of one of them, the distance passes' key reads cost ≈ 8 % of the shading:
-// docs/PERFORMANCE.md, "probes: lane extraction by permutation".)
-#if defined(PROBE_MASK_BITS) && __has_builtin(__builtin_ia32_permvarsi512)
+// parts and a 4-byte load of one of them, the distance passes' key reads cost 6–10 % of the
+// shading: docs/PERFORMANCE.md, "probes: the 8 probes' weights without branches, lane keys by
+// permutation".) __has_builtin is tested only where PROBE_MASK_BITS says it exists.
+#ifdef PROBE_MASK_BITS
+#if __has_builtin(__builtin_ia32_permvarsi512)
 #define PROBE_LANE_PERMUTE
+#endif
+#endif
+#ifdef PROBE_LANE_PERMUTE
 inline int probe_lane(intV v, int l) { return __builtin_ia32_permvarsi512(v, (intV)(l))[0]; }
 #else
 inline int probe_lane(intV v, int l) {
