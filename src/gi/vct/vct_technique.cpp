@@ -27,7 +27,8 @@ VoxelScene::Directional directionalVoxels(const ParamSet& p) {
 // groups to its threads in runs of min(⌈remaining / threads⌉, 32 · threads) while ≤ 1024 remain:
 // with few groups the first runs are large and the thread that took the costlier run finishes
 // last (half resolution, 60 groups of 8 × 8: 30 at once, the top half of the image, ≈ 60 % of the
-// work on Sponza, to one thread). With ≥ 400 groups the runs are ≤ 64, and the last ones small.
+// work on Sponza, to one thread). With 400–1024 groups every run is at most 64 groups (≤ 16 %) and
+// the last runs are small; above 1024 the runs of 512 leave more than 512 groups for runs of 64.
 // Smaller groups than needed cost CPU time (2 × 2 at full resolution, 3600 groups: ≈ +12 %);
 // docs/PERFORMANCE.md, "Diffuse cones: work-groups dealt evenly to PoCL's threads".
 cl::NDRange vctDiffuseLaunch(int itemsX, int itemsY) {
