@@ -5,6 +5,7 @@
 
 #include "cl/kernel_sources.h"
 #include "cl/runtime.h"
+#include "cl/tile_groups.h"
 #include "kernels/common/shared_types.h"
 #include "test_support.h"
 
@@ -105,4 +106,25 @@ TEST(ClRuntime, RefusesAllocationLargerThanDevice) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("absurd test buffer"), std::string::npos);
   }
+}
+
+// The RSM gather at half of 640 × 360 with 16 lanes: 20 × 45 work-items. On 2 threads, 4 × 4
+// groups would be 60 (≤ 32·2², dealt in halves), 2 × 2 groups are 230; 4 threads need more
+// groups (≤ 512: 1 × 1); a large launch and a GPU keep the given side.
+TEST(ClTileGroups, HalvesTheSideUntilPoclCanDealTheGroupsEvenly) {
+  cl::DeviceInfo cpu;
+  cpu.isCpu = true;
+  cpu.computeUnits = 2;
+  cl::NDRange r = cl::tileGroups2D(cpu, 20, 45, 4);
+  EXPECT_EQ(r.local[0], 2u);
+  EXPECT_EQ(r.local[1], 2u);
+  EXPECT_EQ(r.global[0], 20u);
+  EXPECT_EQ(r.global[1], 46u);
+  EXPECT_EQ(cl::tileGroups2D(cpu, 160, 90, 8).local[0], 8u);  // 240 groups of 8 × 8
+  cpu.computeUnits = 4;
+  EXPECT_EQ(cl::tileGroups2D(cpu, 20, 45, 4).local[0], 1u);
+  cl::DeviceInfo gpu;
+  gpu.isGpu = true;
+  gpu.computeUnits = 2;
+  EXPECT_EQ(cl::tileGroups2D(gpu, 20, 45, 4).local[0], 4u);
 }

@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "cl/gather_width.h"
+#include "cl/tile_groups.h"
 #include "util/halton.h"
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/rsm/rsm_technique.h"
@@ -136,7 +137,9 @@ public:
       gather.args(g.width, g.height, lw, lh, g.position, g.normal, r.view, records_, samples, offsets_, weights_,
                   blockOffsets_, tolerance, innerSamples_, p.getFloat("rsm.d_min"), sampleReach_, int(l > 0), low_);
       size_t gx = (size_t(lw) + (block ? blockWidthLanes_ : vw) - 1) / (block ? blockWidthLanes_ : vw);
-      f.ctx.launch(gather, cl::NDRange::d2(cl::roundUp(gx, 4), cl::roundUp(gy, 4), 4, 4), "rsm: gather");
+      // 4 × 4 work-items per group, 2 × 2 on PoCL's 2 threads at half of 640 × 360 (60 or 120 groups
+      // of 4 × 4 were dealt in halves; cl/tile_groups.h).
+      f.ctx.launch(gather, cl::tileGroups2D(f.ctx.device(), gx, gy, 4), "rsm: gather");
     }
     GeometryTest t;
     t.tauZ = p.getFloat("rsm.tau_z");
