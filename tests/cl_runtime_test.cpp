@@ -108,23 +108,28 @@ TEST(ClRuntime, RefusesAllocationLargerThanDevice) {
   }
 }
 
-// The RSM gather at half of 640 × 360 with 16 lanes: 20 × 45 work-items. On 2 threads, 4 × 4
-// groups would be 60 (≤ 32·2², dealt in halves), 2 × 2 groups are 230; 4 threads need more
-// groups (≤ 512: 1 × 1); a large launch and a GPU keep the given side.
-TEST(ClTileGroups, HalvesTheSideUntilPoclCanDealTheGroupsEvenly) {
+// Launches at 640 × 360 with 16 lanes on PoCL's 2 threads (at least 400 groups): the RSM gather
+// at half resolution, 20 × 45 work-items, 4 × 4 → 2 × 1 (60 → 450 groups); the vct diffuse cones
+// at half resolution, 80 × 45, 4 × 4 → 4 × 2 (240 → 460), at full resolution 160 × 90 kept
+// (920). 4 threads want 800 groups; a GPU keeps the given group.
+TEST(ClTileGroups, HalvesTheGroupUntilPoclCanDealTheLaunchEvenly) {
   cl::DeviceInfo cpu;
   cpu.isCpu = true;
   cpu.computeUnits = 2;
-  cl::NDRange r = cl::tileGroups2D(cpu, 20, 45, 4);
+  cl::NDRange r = cl::balancedTileGroups(cpu, 20, 45, 4, 4);
   EXPECT_EQ(r.local[0], 2u);
-  EXPECT_EQ(r.local[1], 2u);
+  EXPECT_EQ(r.local[1], 1u);
   EXPECT_EQ(r.global[0], 20u);
+  EXPECT_EQ(r.global[1], 45u);
+  r = cl::balancedTileGroups(cpu, 80, 45, 4, 4);
+  EXPECT_EQ(r.local[0], 4u);
+  EXPECT_EQ(r.local[1], 2u);
   EXPECT_EQ(r.global[1], 46u);
-  EXPECT_EQ(cl::tileGroups2D(cpu, 160, 90, 8).local[0], 8u);  // 240 groups of 8 × 8
+  EXPECT_EQ(cl::balancedTileGroups(cpu, 160, 90, 4, 4).local[1], 4u);
   cpu.computeUnits = 4;
-  EXPECT_EQ(cl::tileGroups2D(cpu, 20, 45, 4).local[0], 1u);
+  EXPECT_EQ(cl::balancedTileGroups(cpu, 20, 45, 4, 4).local[0], 1u);
   cl::DeviceInfo gpu;
   gpu.isGpu = true;
   gpu.computeUnits = 2;
-  EXPECT_EQ(cl::tileGroups2D(gpu, 20, 45, 4).local[0], 4u);
+  EXPECT_EQ(cl::balancedTileGroups(gpu, 20, 45, 4, 4).local[0], 4u);
 }

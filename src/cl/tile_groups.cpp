@@ -4,14 +4,14 @@
 
 namespace gi::cl {
 
-NDRange tileGroups2D(const DeviceInfo& device, size_t itemsX, size_t itemsY, size_t maxSide) {
-  size_t side = maxSide;
+NDRange balancedTileGroups(const DeviceInfo& device, size_t itemsX, size_t itemsY, size_t groupW, size_t groupH) {
+  size_t gw = groupW, gh = groupH;
   if (!device.isGpu) {
-    const size_t threads = std::max(1u, device.computeUnits);
-    auto groups = [&](size_t s) { return ((itemsX + s - 1) / s) * ((itemsY + s - 1) / s); };
-    while (side > 1 && groups(side) <= 32 * threads * threads) side /= 2;
+    const size_t minGroups = 200 * std::max(1u, device.computeUnits);
+    auto groups = [&] { return ((itemsX + gw - 1) / gw) * ((itemsY + gh - 1) / gh); };
+    while (groups() < minGroups && gw * gh > 1) (gh >= gw ? gh : gw) /= 2;
   }
-  return NDRange::d2(roundUp(itemsX, side), roundUp(itemsY, side), side, side);
+  return NDRange::d2(roundUp(itemsX, gw), roundUp(itemsY, gh), gw, gh);
 }
 
 }  // namespace gi::cl

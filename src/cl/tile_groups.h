@@ -4,21 +4,21 @@
 
 namespace gi::cl {
 
-// A launch of itemsX × itemsY work-items (each side rounded up to the group side) in square
-// work-groups of side maxSide (a power of two), halved on a CPU device while the launch would
-// have at most 32·T² groups, T = the device's compute units (PoCL's threads).
+// A launch of itemsX × itemsY work-items (each side rounded up to the group's) in work-groups of
+// groupW × groupH, halved on a CPU device (the height first) while the launch would have fewer
+// than 200·T groups, T = the device's compute units (PoCL's threads); GPUs keep the given group.
 //
-// Why: PoCL's pthread device (3.1, lib/CL/devices/pthread/pthread_scheduler.c) hands a launch's
-// work-groups, in row-major order, to its T threads in runs: at most 32·T groups per run while
-// at most 1024 remain (more above), and ⌈remaining / T⌉ when that is fewer. With at most 32·T²
-// groups the first thread thus takes its whole share of the image in one run, and where the
-// cost per pixel differs across the image (the RSM gather and the cone marches cost more in the
-// upper half of Sponza) the thread with the costly half finishes late while the other idles.
-// With more groups the runs are capped and the end is dealt in halving runs down to single
-// groups. Measured on the 2-thread EPYC (docs/PERFORMANCE.md, "Work-groups dealt evenly to
-// PoCL's threads"): launches of 60-120 groups left the busiest thread 0.58-0.61 of the CPU time,
-// 230-460 groups 0.52-0.55, no better with more. GPUs keep maxSide: they take groups one by one.
-// Each work-item computes the same pixels whatever the group shape: the results are the same bits.
-NDRange tileGroups2D(const DeviceInfo& device, size_t itemsX, size_t itemsY, size_t maxSide);
+// Why: PoCL's pthread device (3.1, lib/CL/devices/pthread/pthread_scheduler.c) deals a launch's
+// work-groups, in row-major order, to its T threads in runs of min(⌈remaining / T⌉, 32·T) groups
+// while at most 1024 remain (runs of up to 256·T above). With few groups the first runs are large
+// — at most 32·T² groups are cut into halves at once — and where the cost per pixel differs
+// across the image (the cone marches and the RSM gather cost more in the upper half of Sponza)
+// the thread that took the costlier run finishes last while the other idles. With at least 200·T
+// groups every run is at most 16 % of the launch and the last runs are small. Smaller groups than
+// that cost CPU time (vct diffuse cones, 2 × 2 at 640 × 360: +12 %). Measured with 2 threads only:
+// docs/PERFORMANCE.md, "Diffuse cones: work-groups dealt evenly to PoCL's threads" and "Work-groups
+// dealt evenly to PoCL's threads". Each work-item computes the same pixels whatever the group:
+// the results are the same bits.
+NDRange balancedTileGroups(const DeviceInfo& device, size_t itemsX, size_t itemsY, size_t groupW, size_t groupH);
 
 }  // namespace gi::cl

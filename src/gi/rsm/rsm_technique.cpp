@@ -137,9 +137,9 @@ public:
       gather.args(g.width, g.height, lw, lh, g.position, g.normal, r.view, records_, samples, offsets_, weights_,
                   blockOffsets_, tolerance, innerSamples_, p.getFloat("rsm.d_min"), sampleReach_, int(l > 0), low_);
       size_t gx = (size_t(lw) + (block ? blockWidthLanes_ : vw) - 1) / (block ? blockWidthLanes_ : vw);
-      // 4 × 4 work-items per group, 2 × 2 on PoCL's 2 threads at half of 640 × 360 (60 or 120 groups
-      // of 4 × 4 were dealt in halves; cl/tile_groups.h).
-      f.ctx.launch(gather, cl::tileGroups2D(f.ctx.device(), gx, gy, 4), "rsm: gather");
+      // 4 × 4 work-items per group, fewer where PoCL's threads could not share the groups evenly
+      // (half of 640 × 360 on 2 threads: 60 or 120 groups of 4 × 4, now 2 × 1 or 2 × 2; cl/tile_groups.h).
+      f.ctx.launch(gather, cl::balancedTileGroups(f.ctx.device(), gx, gy, 4, 4), "rsm: gather");
     }
     GeometryTest t;
     t.tauZ = p.getFloat("rsm.tau_z");

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "cl/gather_width.h"
+#include "cl/tile_groups.h"
 #include "gi/filters/discontinuity_filter.h"
 #include "gi/vct/voxel_scene.h"
 #include "util/error.h"
@@ -20,22 +21,6 @@ VoxelScene::Directional directionalVoxels(const ParamSet& p) {
   const std::string& v = p.getChoice("vct.voxels");
   return v == "directional" ? VoxelScene::Directional::Plane
                             : v == "directional_slab" ? VoxelScene::Directional::Slab : VoxelScene::Directional::Off;
-}
-
-// The work-group of vct_diffuse's launch over itemsX × itemsY work-items: 4 × 4, halved (height
-// first) while the launch would have fewer than 400 groups. PoCL's pthread device (3.1) deals the
-// groups to its threads in runs of min(⌈remaining / threads⌉, 32 · threads) while ≤ 1024 remain:
-// with few groups the first runs are large and the thread that took the costlier run finishes
-// last (half resolution, 60 groups of 8 × 8: 30 at once, the top half of the image, ≈ 60 % of the
-// work on Sponza, to one thread). With 400–1024 groups every run is at most 64 groups (≤ 16 %) and
-// the last runs are small; above 1024 the runs of 512 leave more than 512 groups for runs of 64.
-// Smaller groups than needed cost CPU time (2 × 2 at full resolution, 3600 groups: ≈ +12 %);
-// docs/PERFORMANCE.md, "Diffuse cones: work-groups dealt evenly to PoCL's threads".
-cl::NDRange vctDiffuseLaunch(int itemsX, int itemsY) {
-  int gw = 4, gh = 4;
-  auto groups = [&] { return size_t((itemsX + gw - 1) / gw) * size_t((itemsY + gh - 1) / gh); };
-  while (groups() < 400 && gw * gh > 1) (gh >= gw ? gh : gw) /= 2;
-  return cl::NDRange::d2(cl::roundUp(itemsX, gw), cl::roundUp(itemsY, gh), gw, gh);
 }
 
 // Mirrors VctTraceParams in kernels/gi/vct/cone_trace.cl.
@@ -145,7 +130,10 @@ public:
     // A tile of GI_VW traced pixels per work-item (VCT_TILE_W × VCT_TILE_H in cone_trace.cl).
     int tileW = vctLaneTileWidth(lanes_), tileH = lanes_ / tileW;
     int itemsX = (lw + tileW - 1) / tileW, itemsY = (lh + tileH - 1) / tileH;
-    f.ctx.launch(diffuse_, vctDiffuseLaunch(itemsX, itemsY), "vct: diffuse cones");
+    // 4 × 4 work-items per group, fewer where the launch would have too few groups for PoCL's
+    // threads to share evenly (half resolution: 4 × 2; docs/PERFORMANCE.md, "Diffuse cones:
+    // work-groups dealt evenly to PoCL's threads").
+    f.ctx.launch(diffuse_, cl::balancedTileGroups(f.ctx.device(), itemsX, itemsY, 4, 4), "vct: diffuse cones");
     if (down > 1) {
       GeometryTest t;
       t.tauZ = p.getFloat("vct.tau_z");
