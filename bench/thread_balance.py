@@ -11,7 +11,7 @@ of PoCL's dealing, nearly independent of the machine's load, unlike wall-clock t
 
 Usage:
   perf record -e cpu-clock -F 4000 -o run.data -- build/vct_bench --quick --frames 2
-  tools/thread_balance.py run.data [--min-ms 0.5]
+  bench/thread_balance.py run.data [--min-ms 0.5]
 
 Prints one line per kernel object: launches, CPU ms per launch (median), busiest thread's
 ms per launch (median), and the busiest thread's share of all that kernel's CPU time.
