@@ -11,8 +11,8 @@
 //   - full Cornell box (blocks), same spot, full image (direct + lpv) vs the full reference:
 //     measured SSIM 0.470 against the stored converged reference (4096 spp; 0.422 against an in-test
 //     256-spp render); asserted >= 0.44. Issue target
-//     0.85: NOT met, and not reachable by a one-bounce technique here: direct + the path-traced
-//     one-bounce indirect scores 0.70 (the closed white box's orders >= 3 add 85 % to order 2).
+//     0.85: NOT met. It is within reach of one bounce: direct + the converged path-traced one-bounce
+//     indirect scores 0.875 (both 4096 spp; 0.70 with a 256-spp one-bounce image, its noise).
 //     The LPV's own error: light stays within ~8 cells of the surfaces that reflected it (the box
 //     is 32 cells high), so the ceiling quarter of the image gets 0.2 % of its one-bounce light and
 //     the floor quarter 2.3x. Also at 16^3 x 64 iterations (light reaches the ceiling): measured
@@ -20,8 +20,8 @@
 //     orders >= 3; docs/techniques/lpv.md, "Extensions") at 32³ x 32: measured 0.476, asserted >= 0.45.
 //   - Sponza 96×54 with its sun, default 3 cascades of 32³, full image vs the stored converged
 //     reference (2048 spp): measured SSIM 0.763, asserted >= 0.72 (it was 0.486 against a 16-spp
-//     render: most of that gap was reference noise); direct + path-traced one-bounce scores about
-//     0.85 (against 1024 spp); the LPV indirect
+//     render: most of that gap was reference noise); direct + path-traced one-bounce scores 0.878
+//     (docs/ACCURACY.md); the LPV indirect
 //     is 2.3x the one-bounce light (the sunlit floor lights itself). Skipped without media.
 //   - thin wall (builtin:thin_wall, 2 cm wall, 6.25 cm cells): indirect light in the dark room B
 //     over that in the lit room A, without / with the geometry volume: measured 0.0270 / 0.0048
