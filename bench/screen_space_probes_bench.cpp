@@ -4,7 +4,7 @@
 // noisy; docs/PERFORMANCE.md records the numbers.
 //
 //   build/screen_space_probes_bench [--scene scenes/sponza.json] [--width 640 --height 360]
-//                                   [--frames 5] [--quick] [--only ssao|probes]
+//                                   [--frames 5] [--quick] [--only ssao|probes|probes-budget]
 // Device times grow with the machine's load (other processes take the cores). The passes that are
 // judged against targets are therefore also reported as process CPU time per call: the CPU
 // seconds of this process (PoCL's worker threads included) over repeated calls, which other
@@ -12,6 +12,9 @@
 // wall time ≈ CPU time / cores.
 // Kernel A/B under load: GI_AB_KERNEL_DIRS=DIR_A,DIR_B (see abKernelDirs) times two kernel trees
 // against each other in alternating calls after the device-time section.
+// probes.update_budget (not with --quick; alone with --only probes-budget): process CPU time of one
+// update of a dense 32x16x32 grid with 256 and 1024 of its probes per update and with all, and of
+// the default grid, with the memory of each field.
 // Targets: ssao 16 samples + blur <= 4 ms; shading from the probes <= 5 ms; updating 256 probes x
 // 64 rays <= 100 ms (trace + blends + borders).
 #include <sys/resource.h>
@@ -145,6 +148,52 @@ void runKernelAB(cl::Context& ctx, const Scene& scene, Renderer& frame, const st
   unsetenv("GI_KERNEL_DIR");
 }
 
+// The update cost per frame of probes.update_budget: a dense grid (32x16x32 = 16384 probes, where
+// updating every probe costs about a second on a 2-core CPU) with a budget of 256 and 1024 probes
+// per update, and with all; the default grid for comparison. Each field is relocated and given a
+// whole round of updates first (as the technique's first frame), so that the timed updates blend
+// into a complete field.
+void printBudgetUpdateTimes(cl::Context& ctx, const Scene& scene, const DeviceScene& ds, int calls) {
+  std::printf("\nprobes.update_budget: one update (trace + relocate + blends + borders), process CPU time:\n");
+  struct Case {
+    glm::ivec3 counts;  // 0: automatic (8x4x8 for Sponza)
+    int budget, calls;
+  };
+  const glm::ivec3 dense(32, 16, 32);
+  // All 16384 probes take ~1 s per update: 3 timed calls.
+  for (const Case& c : {Case{glm::ivec3(0), 0, calls}, Case{dense, 256, calls}, Case{dense, 1024, calls}, Case{dense, 0, 3}}) {
+    ProbeSettings ps;
+    ps.counts = c.counts;
+    ps.updateBudget = c.budget;
+    ProbeField field(ctx, scene, ds, ps);
+    field.relocate(ds, 4);
+    int round = (field.probeCount() + field.probesPerUpdate() - 1) / field.probesPerUpdate();
+    for (int i = 0; i < round; ++i) field.update(ds, 0.97f);
+    const GiProbeGrid& g = field.grid();
+    // The probes of one update differ: time each update of a whole round (a budget's cost varies
+    // with where its probes lie), else `calls` updates.
+    int n = field.probesPerUpdate() < field.probeCount() ? round : c.calls;
+    std::vector<double> cpuMs;
+    auto wall0 = std::chrono::steady_clock::now();
+    for (int i = 0; i < n; ++i) {
+      double c0 = processCpuSeconds();
+      field.update(ds, 0.97f);
+      ctx.finish();
+      cpuMs.push_back(1e3 * (processCpuSeconds() - c0));
+    }
+    double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    double mean = 0;
+    for (double m : cpuMs) mean += m / double(n);
+    std::sort(cpuMs.begin(), cpuMs.end());
+    std::printf("  %dx%dx%d, %5d of %5d probes per update: %8.2f CPU-ms per update (min %.2f, median %.2f, max "
+                "%.2f; wall %.2f ms), %d updates\n",
+                g.count[0], g.count[1], g.count[2], field.probesPerUpdate(), field.probeCount(), mean, cpuMs.front(),
+                cpuMs[cpuMs.size() / 2], cpuMs.back(), 1e3 * wall / double(n), n);
+    std::printf("    memory: maps %.2f MB, ray results and directions %.3f MB\n", field.mapBytes() / 1e6,
+                field.rayBytes() / 1e6);
+  }
+}
+
 // A direct-light frame: the G-buffer the passes below read.
 std::unique_ptr<Renderer> directFrame(cl::Context& ctx, const Scene& scene, const timing::FrameSettings& a) {
   RenderSettings rs;
@@ -162,11 +211,12 @@ int main(int argc, char** argv) {
   timing::BenchArgs args;
   args.frames.frames = 5;
   if (!timing::parseBenchArgs(argc, argv, "screen_space_probes_bench", args)) return 2;
-  if (!args.only.empty() && args.only != "ssao" && args.only != "probes") {
-    std::fprintf(stderr, "--only %s: expected ssao or probes\n", args.only.c_str());
+  if (!args.only.empty() && args.only != "ssao" && args.only != "probes" && args.only != "probes-budget") {
+    std::fprintf(stderr, "--only %s: expected ssao, probes or probes-budget\n", args.only.c_str());
     return 2;
   }
   bool runSsao = args.only.empty() || args.only == "ssao", runProbes = args.only.empty() || args.only == "probes";
+  bool runBudget = args.only == "probes-budget" || (args.only.empty() && !args.quick);
   const timing::FrameSettings& a = args.frames;
   try {
     cl::Context ctx(cl::selectDevice(""));
@@ -188,6 +238,7 @@ int main(int argc, char** argv) {
     }
     std::unique_ptr<Renderer> frame = directFrame(ctx, scene, a);
     const int calls = 3 * a.frames;
+    if (runBudget) printBudgetUpdateTimes(ctx, scene, frame->deviceScene(), calls);
     if (std::vector<std::string> dirs = abKernelDirs(); !dirs.empty()) {
       runKernelAB(ctx, scene, *frame, dirs, runSsao, runProbes, 10 * a.frames);
       return 0;

@@ -37,7 +37,26 @@ typedef struct {
   float pad[4];
 } GiProbeGrid;  // 80 bytes
 
+// The probes one update launch traces, blends and border-copies (probes.update_budget). The
+// updates go round-robin through an order of all N probes: position i of the order is probe
+// (i · stride) mod N, stride coprime to N (1: index order; the budget's stride spreads the probes
+// of one update over the grid, ProbeField::update()). Slot s, 0 <= s < probes, of this launch is
+// position (first_position + s) mod N (probes <= N: the positions wrap around once at most); its
+// rays are rayResults[s · rays …]. Hysteresis is per probe update (the probe's k-th update since
+// the running mean started blends with min(max, k/(k+1))): within one launch the slots differ by
+// one update at most, the slots from later_slot on having had one more.
+typedef struct {
+  GI_I32 first_position;    // position in the order of slot 0
+  GI_I32 stride;            // position i is probe (i · stride) mod N
+  GI_I32 probes;            // slots in this launch (N: every probe)
+  GI_I32 later_slot;        // first slot with one update more (probes: none)
+  float hysteresis;         // weight of the old value for slots < later_slot
+  float later_hysteresis;   // ... for slots >= later_slot
+  GI_I32 pad[2];
+} GiProbeUpdate;  // 32 bytes
+
 #ifndef __OPENCL_VERSION__
 }  // namespace gi
 static_assert(sizeof(gi::GiProbeGrid) == 80, "GiProbeGrid layout");
+static_assert(sizeof(gi::GiProbeUpdate) == 32, "GiProbeUpdate layout");
 #endif

@@ -12,6 +12,9 @@
 //                          faces is inside geometry; it moves out through the nearest one, or is
 //                          switched off when it cannot);
 //   probe_shade            one work-item per camera pixel: ρ/π · E from probe_field_irradiance().
+// The update kernels (all but probe_shade) take the probes of one update, `slots` (GiProbeUpdate,
+// probe_types.h: every probe, or the probes.update_budget next ones of a round-robin order); the
+// ray results hold one record per slot and ray.
 // Radiance at a ray hit = the hit's emission (only emitters without a punctual stand-in: those
 // with one already light the scene through it) + ρ/π · (E_direct + E_probes), where E_direct sums
 // every punctual light (stand-ins included) with a shadow ray and E_probes, when multi-bounce is on,
@@ -33,18 +36,33 @@ inline int3 probe_index3(const GiProbeGrid* g, int probe) {
   return (int3)(probe % g->count[0], (probe / g->count[0]) % g->count[1], probe / (g->count[0] * g->count[1]));
 }
 
+// The probe that update slot `slot` updates (GiProbeUpdate, probe_types.h).
+inline int probe_of_slot(const GiProbeUpdate* u, int slot, int total) {
+  int position = u->first_position + slot;
+  if (position >= total) position -= total;
+  // Stride 1 (no budget): the index order, without the 64-bit multiply and remainder.
+  return u->stride == 1 ? position : (int)((ulong)position * (ulong)u->stride % (ulong)total);
+}
+
+inline float probe_slot_hysteresis(const GiProbeUpdate* u, int slot) {
+  return slot < u->later_slot ? u->hysteresis : u->later_hysteresis;
+}
+
 // rayDirs: this update's unit ray directions (the same for every probe), traced from each probe's
-// relocated position. Output per ray: (radiance towards the probe, ±hit distance), the distance
+// relocated position, for the probes of `slots` (one work-item per slot and ray). Output per ray,
+// at rayResults[slot · rays + ray]: (radiance towards the probe, ±hit distance), the distance
 // negative when the ray hit the back of a single-sided surface (for probe_relocate; the blends use
 // its magnitude); a miss records zero radiance at grid.max_distance.
 kernel void probe_trace(GiProbeGrid grid, GI_BVH_ARGS, global const float4* positions, global const float4* normals,
                         global const float4* tangents, global const uint* triangleInstance,
                         global const uint* instanceEmits, global const GiLight* lights, int lightCount,
                         global const float4* rayDirs, global const float4* irradiance, global const float2* distance,
-                        global const float4* probeStates, int multiBounce, global float4* rayResults) {
+                        global const float4* probeStates, int multiBounce, GiProbeUpdate slots,
+                        global float4* rayResults) {
   int gid = get_global_id(0);
-  int probe = gid / grid.rays, ray = gid % grid.rays;
-  if (probe >= probe_total(&grid)) return;
+  int slot = gid / grid.rays, ray = gid % grid.rays;
+  if (slot >= slots.probes) return;
+  int probe = probe_of_slot(&slots, slot, probe_total(&grid));
   GiBvh bvh = GI_BVH_MAKE;
   float3 o = probe_position(&grid, probe_index3(&grid, probe)) + probeStates[probe].xyz;
   float3 d = rayDirs[ray].xyz;
@@ -102,15 +120,18 @@ inline void probe_texel_directionsV(intV t, int res, floatV* dx, floatV* dy, flo
 // from there too. Texel t of probe p: p · (res + 2)² + (t / res + 1) · (res + 2) + t % res + 1.
 #define PROBE_TEXEL_INDEX(p, t, res) ((size_t)(p) * ((res) + 2) * ((res) + 2) + ((t) / (res) + 1) * ((res) + 2) + (t) % (res) + 1)
 
-// hysteresis: weight of the texel's previous value (0 on the first update).
+// The probes of `slots`, each with its slot's hysteresis (the weight of the texel's previous
+// value: 0 on the probe's first update).
 kernel void probe_blend_irradiance(GiProbeGrid grid, global const float4* rayDirs, global const float4* rayResults,
-                                   float hysteresis, global float4* irradiance) {
+                                   GiProbeUpdate slots, global float4* irradiance) {
   int res = grid.irradiance_res, texels = res * res, groups = (texels + GI_VW - 1) / GI_VW;
-  int gid = get_global_id(0), probe = gid / groups, t0 = (gid % groups) * GI_VW;
-  if (probe >= probe_total(&grid)) return;
+  int gid = get_global_id(0), slot = gid / groups, t0 = (gid % groups) * GI_VW;
+  if (slot >= slots.probes) return;
+  int probe = probe_of_slot(&slots, slot, probe_total(&grid));
+  float hysteresis = probe_slot_hysteresis(&slots, slot);
   floatV nx, ny, nz;
   probe_texel_directionsV(min(t0 + (intV)(GI_LANES), texels - 1), res, &nx, &ny, &nz);
-  global const float4* rays = rayResults + (size_t)probe * grid.rays;
+  global const float4* rays = rayResults + (size_t)slot * grid.rays;
   floatV zero = (floatV)(0.0f), sx = zero, sy = zero, sz = zero, wsum = zero;
   for (int r = 0; r < grid.rays; ++r) {
     float4 d = rayDirs[r], L = rays[r];
@@ -134,13 +155,15 @@ kernel void probe_blend_irradiance(GiProbeGrid grid, global const float4* rayDir
 }
 
 kernel void probe_blend_distance(GiProbeGrid grid, global const float4* rayDirs, global const float4* rayResults,
-                                 float hysteresis, global float2* distance) {
+                                 GiProbeUpdate slots, global float2* distance) {
   int res = grid.distance_res, texels = res * res, groups = (texels + GI_VW - 1) / GI_VW;
-  int gid = get_global_id(0), probe = gid / groups, t0 = (gid % groups) * GI_VW;
-  if (probe >= probe_total(&grid)) return;
+  int gid = get_global_id(0), slot = gid / groups, t0 = (gid % groups) * GI_VW;
+  if (slot >= slots.probes) return;
+  int probe = probe_of_slot(&slots, slot, probe_total(&grid));
+  float hysteresis = probe_slot_hysteresis(&slots, slot);
   floatV nx, ny, nz;
   probe_texel_directionsV(min(t0 + (intV)(GI_LANES), texels - 1), res, &nx, &ny, &nz);
-  global const float4* rays = rayResults + (size_t)probe * grid.rays;
+  global const float4* rays = rayResults + (size_t)slot * grid.rays;
   floatV zero = (floatV)(0.0f), s1 = zero, s2 = zero, wsum = zero;
   for (int r = 0; r < grid.rays; ++r) {
     float4 d = rayDirs[r];
@@ -165,7 +188,8 @@ kernel void probe_blend_distance(GiProbeGrid grid, global const float4* rayDirs,
 
 // Border texel (x, y) of a bordered map (x or y is 0 or res + 1) repeats the interior texel that
 // lies next to it across the octahedral seam: each edge is mirrored about its middle, and a corner
-// takes the opposite interior corner (all four corners are the direction −z).
+// takes the opposite interior corner (all four corners are the direction −z). The maps of the
+// probes of `slots` (of `probes` in all).
 inline int probe_border_source(int x, int y, int res) {
   int side = res + 2, last = res + 1;
   bool ex = x == 0 || x == last, ey = y == 0 || y == last;
@@ -174,24 +198,29 @@ inline int probe_border_source(int x, int y, int res) {
   return (last - y) * side + (x == 0 ? 1 : res);
 }
 
-#define PROBE_BORDER_KERNEL(NAME, T)                                      \
-  kernel void NAME(global T* map, int res, int probes) {                  \
-    int side = res + 2, gid = get_global_id(0);                           \
-    int probe = gid / (side * side), texel = gid % (side * side);         \
-    if (probe >= probes) return;                                          \
-    int x = texel % side, y = texel / side;                               \
-    if (x > 0 && x <= res && y > 0 && y <= res) return;                   \
-    global T* m = map + (size_t)probe * side * side;                      \
-    m[texel] = m[probe_border_source(x, y, res)];                         \
+#define PROBE_BORDER_KERNEL(NAME, T)                                       \
+  kernel void NAME(global T* map, int res, int probes, GiProbeUpdate slots) { \
+    int side = res + 2, gid = get_global_id(0);                            \
+    int slot = gid / (side * side), texel = gid % (side * side);           \
+    if (slot >= slots.probes) return;                                      \
+    int probe = probe_of_slot(&slots, slot, probes);                       \
+    int x = texel % side, y = texel / side;                                \
+    if (x > 0 && x <= res && y > 0 && y <= res) return;                    \
+    global T* m = map + (size_t)probe * side * side;                       \
+    m[texel] = m[probe_border_source(x, y, res)];                          \
   }
 PROBE_BORDER_KERNEL(probe_border_irradiance, float4)
 PROBE_BORDER_KERNEL(probe_border_distance, float2)
 
 // probes.perceptual_blend: the map the shading and the probe rays read holds √E of every texel
 // (borders included); the blends keep E itself, so the temporal mean stays a mean of irradiance.
-kernel void probe_encode_sqrt(global const float4* irradiance, int texels, global float4* encoded) {
-  int i = get_global_id(0);
-  if (i < texels) encoded[i] = sqrt(irradiance[i]);
+// The maps (mapTexels texels each, borders included) of the probes of `slots` (of `probes`).
+kernel void probe_encode_sqrt(global const float4* irradiance, int mapTexels, int probes, GiProbeUpdate slots,
+                              global float4* encoded) {
+  int gid = get_global_id(0), slot = gid / mapTexels;
+  if (slot >= slots.probes) return;
+  size_t i = (size_t)probe_of_slot(&slots, slot, probes) * mapTexels + gid % mapTexels;
+  encoded[i] = sqrt(irradiance[i]);
 }
 
 // DDGI probe relocation and classification (Majercik et al. 2021, "Scaling probe-based real-time
@@ -203,12 +232,14 @@ kernel void probe_encode_sqrt(global const float4* irradiance, int texels, globa
 //     distance; farther: it moves back towards its grid point by the margin it has.
 // A move is taken only while the offset stays inside the ellipsoid of 0.45 × the spacing around
 // the grid point (the probe stays in its own cell, so the trilinear weights remain meaningful).
-// move = 0: classification only.
+// move = 0: classification only. One work-item per slot of `slots` (the probes just traced).
 kernel void probe_relocate(GiProbeGrid grid, global const float4* rayDirs, global const float4* rayResults,
-                           float backfaceFraction, float minFrontface, int move, global float4* probeStates) {
-  int probe = get_global_id(0);
-  if (probe >= probe_total(&grid)) return;
-  global const float4* rays = rayResults + (size_t)probe * grid.rays;
+                           float backfaceFraction, float minFrontface, int move, GiProbeUpdate slots,
+                           global float4* probeStates) {
+  int slot = get_global_id(0);
+  if (slot >= slots.probes) return;
+  int probe = probe_of_slot(&slots, slot, probe_total(&grid));
+  global const float4* rays = rayResults + (size_t)slot * grid.rays;
   int backfaces = 0;
   float closestBack = INFINITY, closestFront = INFINITY;
   float3 backDir = (float3)(0.0f), frontDir = (float3)(0.0f);

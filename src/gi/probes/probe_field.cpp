@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <random>
 #include <string>
 
@@ -57,6 +58,16 @@ GiProbeGrid fitProbeGrid(const Bounds& bounds, const ProbeSettings& s) {
 }
 
 namespace {
+// The integer nearest n · (√5 − 1)/2 that is coprime to n: consecutive positions i · stride mod n
+// of the probe order then fall like a golden-ratio sequence, k of them spread over all n indices
+// with gaps of about n/k (and so over every layer of the grid), and the order is a permutation.
+int spreadingStride(int n) {
+  int golden = int(std::lround(double(n) * 0.6180339887498949));
+  for (int d = 0;; ++d)
+    for (int c : {golden - d, golden + d})
+      if (c >= 1 && c <= n && std::gcd(c, n) == 1) return c;
+}
+
 float signNotZero(float v) { return v >= 0.0f ? 1.0f : -1.0f; }
 }  // namespace
 
@@ -105,11 +116,24 @@ std::vector<glm::vec4> probeRayDirections(int rays, uint32_t update) {
   return dirs;
 }
 
+GiProbeUpdate probeIndexRange(int first, int count, float hysteresis) {
+  GiProbeUpdate u{};
+  u.first_position = first;
+  u.stride = 1;
+  u.probes = count;
+  u.later_slot = count;
+  u.hysteresis = u.later_hysteresis = hysteresis;
+  return u;
+}
+
 ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& s)
     : ctx_(ctx), grid_(fitProbeGrid(scene.bounds, s)), multiBounce_(s.multiBounce), perceptualBlend_(s.perceptualBlend),
       downsample_(s.downsample),
       relocation_(s.relocate), backfaceFraction_(s.backfaceFraction),
       minFrontface_(s.minFrontface * std::min({grid_.spacing[0], grid_.spacing[1], grid_.spacing[2]})) {
+  if (s.updateBudget < 0) throw Error("probes.update_budget = " + std::to_string(s.updateBudget) + ": must be at least 0 (0 = all probes)");
+  probesPerUpdate_ = s.updateBudget == 0 ? probeCount() : std::min(s.updateBudget, probeCount());
+  probeOrderStride_ = probesPerUpdate_ == probeCount() ? 1 : spreadingStride(probeCount());
   upsampleTest_.tauZ = s.tauZ;
   upsampleTest_.tauNDegrees = s.tauNDegrees;
   if (downsample_ > 1) upsampler_ = std::make_unique<GeometryAwareUpsampler>(ctx, "probes: upsample");
@@ -136,11 +160,13 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   size_t probes = size_t(probeCount());
   size_t irrTexels = probes * size_t(s.irradianceRes + 2) * size_t(s.irradianceRes + 2);
   size_t distTexels = probes * size_t(s.distanceRes + 2) * size_t(s.distanceRes + 2);
-  ctx.requireAllocation(irrTexels * 16 * (s.perceptualBlend ? 2 : 1) + distTexels * 8 + probes * size_t(s.rays) * 16 + probes * 16,
-                        "probes: maps and rays (probes.grid_*, probes.*_res, probes.rays)");
+  // The ray results hold one update's probes: the budget's, not the grid's (a dense grid's saving).
+  size_t rayResultBytes = size_t(probesPerUpdate_) * size_t(s.rays) * 16;
+  ctx.requireAllocation(irrTexels * 16 * (s.perceptualBlend ? 2 : 1) + distTexels * 8 + rayResultBytes + probes * 16,
+                        "probes: maps and rays (probes.grid_*, probes.*_res, probes.rays, probes.update_budget)");
   irradiance_ = cl::Buffer(ctx, irrTexels * 16, CL_MEM_READ_WRITE, "probe irradiance maps");
   distance_ = cl::Buffer(ctx, distTexels * 8, CL_MEM_READ_WRITE, "probe distance maps");
-  rayResults_ = cl::Buffer(ctx, probes * size_t(s.rays) * 16, CL_MEM_READ_WRITE, "probe ray results");
+  rayResults_ = cl::Buffer(ctx, rayResultBytes, CL_MEM_READ_WRITE, "probe ray results");
   rayDirs_ = cl::Buffer(ctx, size_t(s.rays) * 16, CL_MEM_READ_ONLY, "probe ray directions");
   states_ = cl::Buffer(ctx, probes * 16, CL_MEM_READ_WRITE, "probe states");
   ctx.fill(states_, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));  // at the grid points, active
@@ -156,7 +182,7 @@ ProbeField::ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& 
   instanceEmits_ = ctx.upload(instanceEmissionFlags(scene), "probe instance emission flags");
 }
 
-void ProbeField::trace(const DeviceScene& scene, bool shadeHits) {
+void ProbeField::trace(const DeviceScene& scene, bool shadeHits, const GiProbeUpdate& slots) {
   unsigned a = 0;
   trace_.setArg(a++, grid_);
   a = bvh_->setArgs(trace_, a);
@@ -172,55 +198,83 @@ void ProbeField::trace(const DeviceScene& scene, bool shadeHits) {
   trace_.setArg(a++, distance_);
   trace_.setArg(a++, states_);
   trace_.setArg(a++, int(shadeHits && multiBounce_ && updates_ > 0));
+  trace_.setArg(a++, slots);
   trace_.setArg(a++, rayResults_);
-  size_t rays = size_t(probeCount()) * size_t(grid_.rays);
+  size_t rays = size_t(slots.probes) * size_t(grid_.rays);
   ctx_.launch(trace_, cl::NDRange::d1(cl::roundUp(rays, 64), 64), "probes: trace rays");
 }
 
-void ProbeField::relocateFromRays(bool moveProbes) {
-  relocate_.args(grid_, rayDirs_, rayResults_, backfaceFraction_, minFrontface_, int(moveProbes), states_);
-  ctx_.launch(relocate_, cl::NDRange::d1(cl::roundUp(size_t(probeCount()), 64), 64), "probes: relocate");
+void ProbeField::relocateFromRays(bool moveProbes, const GiProbeUpdate& slots) {
+  relocate_.args(grid_, rayDirs_, rayResults_, backfaceFraction_, minFrontface_, int(moveProbes), slots, states_);
+  ctx_.launch(relocate_, cl::NDRange::d1(cl::roundUp(size_t(slots.probes), 64), 64), "probes: relocate");
 }
 
 void ProbeField::relocate(const DeviceScene& scene, int passes) {
   if (!relocation_) return;
+  int probes = probeCount();
   for (int i = 0; i < passes; ++i) {
     // Directions of update numbers no update uses (the high half), a new rotation per pass.
     std::vector<glm::vec4> dirs = probeRayDirections(grid_.rays, 0x80000000u + relocationPasses_++);
     ctx_.write(rayDirs_, dirs.data(), dirs.size() * sizeof(glm::vec4));
-    trace(scene, false);
-    relocateFromRays(true);
+    // Every probe, in batches of what the ray results hold (no hit is shaded: the batches are
+    // independent).
+    for (int first = 0; first < probes; first += probesPerUpdate_) {
+      GiProbeUpdate batch = probeIndexRange(first, std::min(probesPerUpdate_, probes - first));
+      trace(scene, false, batch);
+      relocateFromRays(true, batch);
+    }
   }
 }
 
+GiProbeUpdate ProbeField::nextUpdateSlots(float maxHysteresis) const {
+  // Probe update number q (counted from the last restartMean()) is update floor(q / N) of the
+  // probe at position q mod N of the order: round-robin, every probe comes once in any N
+  // consecutive numbers.
+  uint64_t probes = uint64_t(probeCount()), sinceMean = probeUpdates_ - meanStartProbeUpdates_;
+  uint64_t rounds = sinceMean / probes, intoRound = sinceMean % probes;
+  auto hysteresis = [&](uint64_t k) {
+    float kf = float(k);
+    return std::min(maxHysteresis, kf / (kf + 1.0f));
+  };
+  GiProbeUpdate slots{};
+  slots.first_position = int(probeUpdates_ % probes);
+  slots.stride = probeOrderStride_;
+  slots.probes = probesPerUpdate_;
+  slots.later_slot = int(probes - intoRound);  // from this slot on: the probe's update rounds + 1
+  slots.hysteresis = hysteresis(rounds);
+  slots.later_hysteresis = hysteresis(rounds + 1);
+  return slots;
+}
+
 void ProbeField::update(const DeviceScene& scene, float maxHysteresis, bool moveProbes) {
-  float k = float(updates_ - meanStart_);
-  float hysteresis = std::min(maxHysteresis, k / (k + 1.0f));
+  GiProbeUpdate slots = nextUpdateSlots(maxHysteresis);
   std::vector<glm::vec4> dirs = probeRayDirections(grid_.rays, updates_);
   ctx_.write(rayDirs_, dirs.data(), dirs.size() * sizeof(glm::vec4));
-  size_t probes = size_t(probeCount());
-  trace(scene, true);
-  if (relocation_) relocateFromRays(moveProbes);
+  size_t probes = size_t(slots.probes);
+  trace(scene, true, slots);
+  if (relocation_) relocateFromRays(moveProbes, slots);
 
   // The blend kernels take the vector width's worth of texels of one probe per work-item.
   size_t vw = size_t(vectorWidth_);
   auto items = [&](int res) { return probes * ((size_t(res) * size_t(res) + vw - 1) / vw); };
-  blendIrradiance_.args(grid_, rayDirs_, rayResults_, hysteresis, irradiance_);
+  blendIrradiance_.args(grid_, rayDirs_, rayResults_, slots, irradiance_);
   ctx_.launch(blendIrradiance_, cl::NDRange::d1(cl::roundUp(items(grid_.irradiance_res), 16), 16),
               "probes: blend irradiance");
-  blendDistance_.args(grid_, rayDirs_, rayResults_, hysteresis, distance_);
+  blendDistance_.args(grid_, rayDirs_, rayResults_, slots, distance_);
   ctx_.launch(blendDistance_, cl::NDRange::d1(cl::roundUp(items(grid_.distance_res), 16), 16), "probes: blend distance");
 
   size_t irrSide = size_t(grid_.irradiance_res + 2), distSide = size_t(grid_.distance_res + 2);
-  borderIrradiance_.args(irradiance_, grid_.irradiance_res, int(probes));
+  borderIrradiance_.args(irradiance_, grid_.irradiance_res, probeCount(), slots);
   ctx_.launch(borderIrradiance_, cl::NDRange::d1(cl::roundUp(probes * irrSide * irrSide, 64), 64), "probes: irradiance borders");
-  borderDistance_.args(distance_, grid_.distance_res, int(probes));
+  borderDistance_.args(distance_, grid_.distance_res, probeCount(), slots);
   ctx_.launch(borderDistance_, cl::NDRange::d1(cl::roundUp(probes * distSide * distSide, 64), 64), "probes: distance borders");
   if (perceptualBlend_) {
-    int texels = int(probes * irrSide * irrSide);
-    encodeSqrt_.args(irradiance_, texels, irradianceSqrt_);
-    ctx_.launch(encodeSqrt_, cl::NDRange::d1(cl::roundUp(size_t(texels), 64), 64), "probes: irradiance square roots");
+    int mapTexels = int(irrSide * irrSide);
+    encodeSqrt_.args(irradiance_, mapTexels, probeCount(), slots, irradianceSqrt_);
+    ctx_.launch(encodeSqrt_, cl::NDRange::d1(cl::roundUp(probes * size_t(mapTexels), 64), 64),
+                "probes: irradiance square roots");
   }
+  probeUpdates_ += uint64_t(slots.probes);
   ++updates_;
 }
 

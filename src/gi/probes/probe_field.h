@@ -33,6 +33,7 @@ struct ProbeSettings {
   int irradianceRes = 8;         // interior texels per side of an irradiance map
   int distanceRes = 16;          // ... of a distance map
   int rays = 64;                 // rays per probe per update
+  int updateBudget = 0;          // probes per update, round-robin (probes.update_budget); 0 or ≥ the probe count: all
   int distanceExponentLog2 = 6;  // distance filter weight max(0, cos)^(2^this)
   int chebyshevPower = 3;
   bool smoothBackface = true;    // DDGI's smooth backface weight ((n·ω + 1)/2)² + 0.2; false: seed 004's eq. 7
@@ -67,28 +68,43 @@ glm::vec3 probeTexelDirection(int tx, int ty, int res);
 // rotated by a pseudo-random rotation drawn from the update number (deterministic).
 std::vector<glm::vec4> probeRayDirections(int rays, uint32_t update);
 
+// The launch of probes first … first + count − 1 in index order, all with one hysteresis (an
+// update without a budget is probeIndexRange(0, N, h)); for kernel tests and relocation batches.
+GiProbeUpdate probeIndexRange(int first, int count, float hysteresis = 0.0f);
+
 class ProbeField {
 public:
   ProbeField(cl::Context& ctx, const Scene& scene, const DeviceScene& deviceScene, const ProbeSettings& settings);
 
-  // One update: trace grid.rays rays per probe, blend into the maps with weight
-  // min(maxHysteresis, k/(k+1)) for the old value at update k (k = 0 first, or at the last
-  // restartMean(): the running mean over the updates since, then an exponential average), copy
-  // the borders.
-  // With relocation on, the update's rays also classify the probes and, when moveProbes, move them
-  // (kernels/gi/probes/probes.cl, probe_relocate).
+  // One update of probesPerUpdate() probes: trace grid.rays rays per probe, blend into the maps
+  // with weight min(maxHysteresis, k/(k+1)) for the old value at the probe's update k (k = 0
+  // first, or at the last restartMean(): the running mean over the probe's updates since, then an
+  // exponential average), copy the borders. With a budget (settings.updateBudget < the probe
+  // count) update u takes the next budget probes of a fixed round-robin order that spreads them
+  // over the grid (probeOrderStride(); docs/techniques/probes.md says why this order); the other
+  // probes keep their maps and states.
+  // With relocation on, the update's rays also classify its probes and, when moveProbes, move
+  // them (kernels/gi/probes/probes.cl, probe_relocate).
   void update(const DeviceScene& deviceScene, float maxHysteresis, bool moveProbes = true);
-  // Relocation alone: `passes` times, trace distances only and move the probes (before a static
-  // rebuild, so that the maps are built at the final positions). Nothing when relocation is off.
+  // Relocation alone: `passes` times, trace distances only and move every probe (before the first
+  // update, so that the maps are built at the final positions; in batches of the budget, which
+  // gives the same result since a probe's relocation reads only its own rays). Nothing when
+  // relocation is off.
   void relocate(const DeviceScene& deviceScene, int passes);
-  // The next update replaces the maps and starts a new running mean (its rays already see the
-  // field so far: with multi-bounce, more bounces than the updates before).
-  void restartMean() { meanStart_ = updates_; }
+  // Each probe's next update replaces its maps and starts a new running mean (its rays already see
+  // the field so far: with multi-bounce, more bounces than the updates before).
+  void restartMean() { meanStartProbeUpdates_ = probeUpdates_; }
   void shade(const GBuffer& gbuffer, cl::Buffer& indirect);
 
   const GiProbeGrid& grid() const { return grid_; }
   int probeCount() const { return grid_.count[0] * grid_.count[1] * grid_.count[2]; }
-  uint32_t updates() const { return updates_; }
+  uint32_t updates() const { return updates_; }  // update() calls so far
+  // Probes one update() takes: the budget, or every probe (budget 0 or at least the probe count).
+  int probesPerUpdate() const { return probesPerUpdate_; }
+  // The order the updates go through the probes: position i is probe (i · stride) mod N; update u
+  // takes positions u · probesPerUpdate() … (u + 1) · probesPerUpdate() − 1 mod N. 1 without a
+  // budget; with one, the stride spreads each update's probes over the grid.
+  int probeOrderStride() const { return probeOrderStride_; }
   const cl::Buffer& irradiance() const { return irradiance_; }  // float4 per texel, layout probe_types.h
   // The maps the shading and the probe rays read: irradiance(), or its square roots (√E per texel)
   // with perceptual blending.
@@ -120,9 +136,15 @@ private:
   cl::Buffer irradiance_, irradianceSqrt_, distance_, states_, rayDirs_, rayResults_, instanceEmits_, low_;
   bool relocation_;
   float backfaceFraction_, minFrontface_;  // minFrontface_ in metres
-  void trace(const DeviceScene& deviceScene, bool shadeHits);
-  void relocateFromRays(bool moveProbes);
-  uint32_t updates_ = 0, meanStart_ = 0, relocationPasses_ = 0;
+  int probesPerUpdate_;
+  int probeOrderStride_;  // the round-robin order: position i is probe (i · stride) mod N (GiProbeUpdate)
+  void trace(const DeviceScene& deviceScene, bool shadeHits, const GiProbeUpdate& slots);
+  void relocateFromRays(bool moveProbes, const GiProbeUpdate& slots);
+  GiProbeUpdate nextUpdateSlots(float maxHysteresis) const;
+  uint32_t updates_ = 0, relocationPasses_ = 0;
+  // Probe updates so far (update() adds probesPerUpdate()), and their number at the last
+  // restartMean(): probe p's updates are those at positions p, p + N, p + 2N, … of this count.
+  uint64_t probeUpdates_ = 0, meanStartProbeUpdates_ = 0;
 };
 
 }  // namespace gi

@@ -3,6 +3,9 @@
 // with hysteresis (lights may move); static rebuilds the field completely on the first frame
 // (probes.rebuild_updates updates, a running mean, each one more bounce) and then only shades.
 // Both start with relocation passes (probes.relocate) that move probes out of geometry.
+// probes.update_budget (dynamic only): each frame updates that many probes round-robin instead of
+// all; the first frame updates every probe (a whole round in budget-sized launches), so that the
+// field starts complete.
 #include "gi/probes/probes_technique.h"
 
 #include <memory>
@@ -15,6 +18,10 @@ ProbeSettings probeSettings(const ParamSet& p) {
   s.irradianceRes = p.getInt("probes.irradiance_res");
   s.distanceRes = p.getInt("probes.distance_res");
   s.rays = p.getInt("probes.rays");
+  // The static rebuild happens once and updates every probe: a budget would only split it into
+  // more launches (and make the later ones see the earlier ones' new maps), so it gets none and
+  // its ray results hold all probes.
+  s.updateBudget = p.getChoice("probes.update") == "dynamic" ? p.getInt("probes.update_budget") : 0;
   int exponent = std::stoi(p.getChoice("probes.distance_exponent"));
   s.distanceExponentLog2 = 0;
   while ((1 << s.distanceExponentLog2) < exponent) ++s.distanceExponentLog2;
@@ -51,7 +58,10 @@ public:
     bool dynamic = p.getChoice("probes.update") == "dynamic";
     if (field_->updates() == 0) field_->relocate(f.deviceScene, kFirstRelocationPasses);
     if (dynamic) {
-      field_->update(f.deviceScene, p.getFloat("probes.hysteresis"));
+      // First frame: a whole round, ⌈N/budget⌉ updates (one without a budget).
+      int probes = field_->probeCount(), perUpdate = field_->probesPerUpdate();
+      int updates = field_->updates() == 0 ? (probes + perUpdate - 1) / perUpdate : 1;
+      for (int i = 0; i < updates; ++i) field_->update(f.deviceScene, p.getFloat("probes.hysteresis"));
     } else if (field_->updates() == 0) {
       // Update i adds a bounce (multi-bounce) and averages noise. A running mean over all n would
       // keep the first updates' fewer bounces (with albedo 0.5, 80 % of the converged indirect light
@@ -90,7 +100,11 @@ TechniqueInfo probesTechniqueInfo() {
             p.addInt("probes.rays", 64, 1, 4096, "rays per probe per update");
             p.addChoice("probes.update", "dynamic", {"dynamic", "static"},
                         "dynamic: one update per frame blended with hysteresis; static: a full rebuild on the first frame only");
-            p.addFloat("probes.hysteresis", 0.97, 0.0, 1.0, "weight of the previous value in a dynamic update (DDGI)");
+            p.addFloat("probes.hysteresis", 0.97, 0.0, 1.0,
+                       "weight of the previous value in a dynamic update of a probe (DDGI; per update of that probe)");
+            p.addInt("probes.update_budget", 0, 0, 64 * 64 * 64,
+                     "dynamic: probes updated per frame, round-robin in index order (the first frame updates all); "
+                     "0 or more than the grid's probes = all (read at setup)");
             p.addInt("probes.rebuild_updates", 32, 1, 4096, "static: updates averaged in the full rebuild (each adds a bounce)");
             p.addBool("probes.multibounce", true, "ray hits gather the probes' own irradiance (infinite bounces over updates)");
             p.addChoice("probes.distance_exponent", "64", {"1", "2", "4", "8", "16", "32", "64"},
