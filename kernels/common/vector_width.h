@@ -191,10 +191,23 @@ typedef ulong ulongV;
 #define GI_GATHER_AOS2(T, p, i, X, Y) GI_GATHER_SPAN2(T, p, ((i) * 2), X, Y)
 
 // Lane-wise helpers (structure of arrays). GI_SEL(a, b, c): b where c is true, else a.
+// GI_NOT(m): the lanes where the mask m (an intV of comparisons: 0 / −1 per lane, 0 / 1 at GI_VW 1)
+// is false, for a mask that is not one comparison (e.g. a loop's `done`; a comparison is negated
+// by writing the opposite one, `a != b`, not `!(a == b)`). Not `!m`, for Oclgrind (README,
+// "Development notes"): it keeps a vector comparison's true as the byte 0xff per lane and an i1
+// constant's as 1, and clang lowers `!m` (also `m == 0`) to an xor of the <N x i1> mask with a
+// `true` vector, which it evaluates to 0xfe / 0x01 (−2 / 1 per lane, both true to a branch).
+// select() is a call there, which the optimiser leaves alone. For the same reason no mask is a
+// constant (an all-true `(intV)(-1)` mask selected against comparisons: 1 per lane) or one
+// comparison of two values that are the same in every lane (evaluated once, broadcast: 1 per
+// lane), and masks are counted with GI_SEL(n, n + 1, m), not `n -= m` (an add of the mask's
+// zero-extension: 255 per lane). docs/PERFORMANCE.md, "Oclgrind's lane masks".
 #if GI_VW == 1
 #define GI_SEL(a, b, c) ((c) ? (b) : (a))
+#define GI_NOT(m) (!(m))
 #else
 #define GI_SEL(a, b, c) select(a, b, c)
+#define GI_NOT(m) select((intV)(-1), (intV)(0), m)
 #endif
 
 // Stores the first `valid` lanes of v (lane type T: float, int or uint) at p[i …]: one vector

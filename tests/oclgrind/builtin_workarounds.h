@@ -10,8 +10,10 @@
 // and Oclgrind reports invalid reads that no device makes (in the lane-wise kernels: every
 // `min(x, width - 1)` on an intV). Definitions of these overloads here, which broadcast the
 // scalar, replace Oclgrind's built-in ones (it only interprets functions the program does not
-// define). Oclgrind's other known mis-evaluation, `!` of a vector comparison (1 / −2 per lane
-// instead of 0 / −1), cannot be fixed from here: kernels write the opposite comparison instead.
+// define). Oclgrind's other known mis-evaluations, of lane masks that the optimiser turns into i1
+// logic with a constant (`!` of a vector mask: 1 / −2 per lane instead of 0 / −1; an all-true
+// constant mask or one comparison broadcast to the lanes: 1; `count -= mask`: 255), cannot be fixed
+// from here: kernels avoid those forms (GI_NOT in kernels/common/vector_width.h).
 // Oclgrind also cannot execute some clang builtins (OCLGRIND FATAL ERROR "Undefined external
 // function: llvm.prefetch.p1i8", "llvm.floor.v16f32"; the kernel is then not found): the macros
 // at the end map them to what it can run (a prefetch never faults, so dropping it hides nothing).

@@ -25,13 +25,10 @@
 #include "common/shared_types.h"
 #include "common/vector_width.h"
 
-// Adds 1 to the integer lanes of `count` where `mask` holds: a vector comparison's true is −1 (one
-// subtraction), a scalar one's is 1.
-#if GI_VW == 1
-#define SSAO_COUNT(count, mask) (count) += (mask)
-#else
-#define SSAO_COUNT(count, mask) (count) -= (mask)
-#endif
+// Adds 1 to the integer lanes of `count` where `mask` holds. A select, not `count -= mask` (a vector
+// comparison's true is −1): the subtraction compiles to an add of the mask's zero-extension, which
+// Oclgrind 21.10 evaluates to 255 per lane (GI_NOT in common/vector_width.h).
+#define SSAO_COUNT(count, mask) (count) = GI_SEL(count, (count) + 1, mask)
 
 #ifndef GI_SSAO_SAMPLES
 #define GI_SSAO_SAMPLES 16
@@ -74,7 +71,7 @@
 
 inline floatV ssao_load1(global const float* plane, int i, int valid) {
   if (valid == GI_VW) return vloadV(0, plane + i);
-  intV idx = min((intV)(GI_LANES), valid - 1);
+  intV idx = min((intV)(GI_LANES), (intV)(valid - 1));
   return GI_GATHER(floatV, plane + i, idx);
 }
 
@@ -144,7 +141,7 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
   SSAO_LOAD4(geoNormal, i0, valid, wx, wy, wz, unused)
 #else
   // Camera pixels (D·u, D·v) of the lanes (the last valid one repeated): gathered.
-  intV src = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, gridWidth - 1);
+  intV src = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, (intV)(gridWidth - 1));
   z = GI_GATHER(floatV, depth, src);
   GI_GATHER_AOS4(float, (global const float*)geoNormal, src, wx, wy, wz, unused)
   ssao_store1(gridDepth, i0, valid, z);
@@ -247,7 +244,7 @@ kernel void ssao_occlusion(int gridWidth, int gridHeight, int width, GiView came
   SSAO_LOAD4(position, i0, valid, Pwx, Pwy, Pwz, unused)
   SSAO_LOAD4(normal, i0, valid, nx, ny, nz, unused)
 #else
-  intV own = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, gridWidth - 1);
+  intV own = (GI_SSAO_DOWN * y) * width + GI_SSAO_DOWN * min(px0 + GI_LANES, (intV)(gridWidth - 1));
   GI_GATHER_AOS4(float, (global const float*)position, own, Pwx, Pwy, Pwz, unused)
   GI_GATHER_AOS4(float, (global const float*)normal, own, nx, ny, nz, unused)
 #endif
@@ -434,7 +431,7 @@ kernel void ssao_blur_compose(int width, int height, global const float* depth, 
       } else {
         intV xx = x0 + lanes;
         inside = (xx >= 0) & (xx < width);
-        intV xc = row + clamp(xx, 0, width - 1);
+        intV xc = row + clamp(xx, (intV)(0), (intV)(width - 1));
         zq = GI_GATHER(floatV, depth, xc);
         oq = GI_GATHER(floatV, occlusionIn, xc);
         if (bleeding) {
@@ -524,8 +521,8 @@ kernel void ssao_upsample_blur_compose(int width, int height, int gridWidth, int
     zE = SSAO_EVEN(a, b);
     zO = SSAO_ODD(a, b);
   } else {  // pixels past the border repeat the last one (not stored)
-    zE = GI_GATHER(floatV, depth + row0, min(x0 + 2 * lanes, width - 1));
-    zO = GI_GATHER(floatV, depth + row0, min(x0 + 2 * lanes + 1, width - 1));
+    zE = GI_GATHER(floatV, depth + row0, min(x0 + 2 * lanes, (intV)(width - 1)));
+    zO = GI_GATHER(floatV, depth + row0, min(x0 + 2 * lanes + 1, (intV)(width - 1)));
   }
   floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
   floatV occE = zero, ExE = zero, EyE = zero, EzE = zero;
@@ -555,7 +552,7 @@ kernel void ssao_upsample_blur_compose(int width, int height, int gridWidth, int
       } else {
         intV u = c0 + k + lanes;
         inside = (u >= 0) & (u < gridWidth);
-        intV uc = row + clamp(u, 0, gridWidth - 1);
+        intV uc = row + clamp(u, (intV)(0), (intV)(gridWidth - 1));
         A = GI_GATHER(floatV, gridInvDepth, uc);
         Q = GI_GATHER(floatV, gridSlopeX, uc);
         slopeY = GI_GATHER(floatV, gridSlopeY, uc);

@@ -377,8 +377,12 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
   intV n3 = (intV)(1) << n3Shift;
   // Light arriving at the apex travels along −d: the SH basis at −d.
   floatV Y0 = (floatV)(GI_SH_Y0), Y1y = -GI_SH_Y1 * d.y, Y1z = -GI_SH_Y1 * d.z, Y1x = -GI_SH_Y1 * d.x;
-  intV isoLanes = level < GI_VCT_FIRST_DIRECTIONAL_LEVEL;
-  if (!m.anisotropic) isoLanes = (intV)(-1);
+  // level < the first directional level (every level with isotropic mips), as the sign of the
+  // difference: not a constant all-true mask for isotropic mips, and not a comparison, which the
+  // compiler evaluates once and broadcasts where the level is the same in every lane (the SH
+  // voxels' vox_level_sample_uniform_lanes): Oclgrind gets both wrong (GI_NOT, vector_width.h).
+  // 0 / −1 at every width (GI_SEL, GI_ANY and GI_ALL take any nonzero as true at GI_VW 1).
+  intV isoLanes = (level - (m.anisotropic ? GI_VCT_FIRST_DIRECTIONAL_LEVEL : INT_MAX)) >> 31;
   // Lanes masked out of a volume (weight 0) read its first voxels only (n = 1, base 0): the
   // isotropic levels ≥ 1 are not built with anisotropic mips, and level 0 has no directional
   // volumes unless GI_VCT_DIRECTIONAL; unwritten memory could hold NaN, and NaN·0 is NaN.
@@ -571,7 +575,7 @@ inline RgbaV vox_sample_lanes(VoxelMipsV m, float3V p, float3V d, floatV level) 
   RgbaV c;
   c.r = c.g = c.b = c.a = (floatV)(0.0f);
   vox_level_sample_lanes(m, l0, p, d, 1.0f - w1, &c);
-  if (GI_ANY(second)) vox_level_sample_lanes(m, min(l0 + 1, m.levels - 1), p, d, w1, &c);
+  if (GI_ANY(second)) vox_level_sample_lanes(m, min(l0 + 1, (intV)(m.levels - 1)), p, d, w1, &c);
   vct_clamp_sh_lanes(&c);
   return c;
 }
@@ -691,7 +695,7 @@ inline RgbaV vct_cone_lanes(VoxelMipsV m, global const uchar* emptySpace, float3
   intV sampled;
   float limit = (float)m.N;
   for (;;) {
-    for (intV advance = !done;;) {
+    for (intV advance = GI_NOT(done);;) {
       // vct_cone_advance of the lanes in `advance`; the others keep their t (and so their p,
       // diameter and state).
       floatV stepNext = fmax(0.5f, stepFactor * diameter);
@@ -703,8 +707,8 @@ inline RgbaV vct_cone_lanes(VoxelMipsV m, global const uchar* emptySpace, float3
       done = done || t > maxDistance || p.x < -margin || p.y < -margin || p.z < -margin || p.x > limit + margin ||
              p.y > limit + margin || p.z > limit + margin;
       // Footprint in front: nothing sampled below h = 2.5 voxels.
-      sampled = !done && h0 + t * cosN - 1.0f >= 1.5f;
-      advance = !done && !sampled;
+      sampled = GI_NOT(done) && h0 + t * cosN - 1.0f >= 1.5f;
+      advance = GI_NOT(done || sampled);
       if (emptySpace) advance = advance || (sampled && vct_lookup_empty_lanes(m, emptySpace, p, diameter));
       if (!GI_ANY(advance)) break;
     }
@@ -773,7 +777,7 @@ inline RgbaV vct_cone_levels_lanes(VoxelMipsV m, float3V o, float3V d, float tan
       vct_corrected_lanes(s[k], (floatV)(stepOverDiameter[k]), &corrected[k], &perAlpha[k]);
     for (int k = 0; k < count; ++k) {
       done = done || doneAt[k];
-      vct_composite_corrected_lanes(s[k], !done, corrected[k], perAlpha[k], (floatV)(aoFalloff[k]), &c, &occ);
+      vct_composite_corrected_lanes(s[k], GI_NOT(done), corrected[k], perAlpha[k], (floatV)(aoFalloff[k]), &c, &occ);
       done = done || c.a >= 0.99f;
     }
     if (vct_all(done)) break;
@@ -806,7 +810,7 @@ __attribute__((always_inline)) inline void vct_composite_chunk_lanes(RgbaV* s, i
                                                                      floatV* aoFalloff, int count, RgbaV* c,
                                                                      floatV* occ, intV* saturated) {
   for (int k = 0; k < count; ++k) {
-    vct_composite_lanes(s[k], sampled[k] && !*saturated, stepOverDiameter[k], aoFalloff[k], c, occ);
+    vct_composite_lanes(s[k], sampled[k] && GI_NOT(*saturated), stepOverDiameter[k], aoFalloff[k], c, occ);
     *saturated = *saturated || c->a >= 0.99f;
   }
 }
@@ -843,7 +847,7 @@ inline RgbaV vct_cone_levels_varying_lanes(VoxelMipsV m, float3V o, float3V d, f
   int count = 0;
   while (!vct_all(left || saturated)) {
     // The next sample of every lane not done: the next sub-step, or the first of the next level.
-    intV advance = !(left || saturated);
+    intV advance = GI_NOT(left || saturated);
     intV nextLevel = advance && j + 1.0f > steps;
     if (GI_ANY(nextLevel)) {  // (most steps stay within the lanes' levels: no divisions)
       level = GI_SEL(level, level + 1, nextLevel);
@@ -860,7 +864,7 @@ inline RgbaV vct_cone_levels_varying_lanes(VoxelMipsV m, float3V o, float3V d, f
     floatV margin = 0.5f * diameter;
     left = left || (advance && (t > maxDistance || p.x < -margin || p.y < -margin || p.z < -margin ||
                                 p.x > limit + margin || p.y > limit + margin || p.z > limit + margin));
-    intV sampled = !(left || saturated);
+    intV sampled = GI_NOT(left || saturated);
     if (!GI_ANY(sampled)) break;
     // Lanes that are done look up the highest level of a sampled lane (weight irrelevant: masked in
     // the compositing), so that they add no lookup of a level no sampled lane needs.
