@@ -36,6 +36,16 @@ double displaySsim(const test::AccuracyPair& p, const Scene& s) {
   return metrics::ssim(displayTransform(p.reference, s.exposure), displayTransform(p.raster, s.exposure)).mean;
 }
 
+// Sponza 96×54 with its sun, static rebuild (8 × 128 rays), full image against the stored converged
+// reference; `grid` adds probes.grid_* settings (none: the automatic 8×4×8).
+test::AccuracyPair sponzaAgainstReference(const Scene& sponza, std::vector<std::string> grid) {
+  std::vector<std::string> sets = {"probes.update=static", "probes.rebuild_updates=8", "probes.rays=128",
+                                   "shadow.resolution=1024"};
+  sets.insert(sets.end(), grid.begin(), grid.end());
+  return test::renderAgainstReference(sponza, "probes", 96, 54, sets, false, ReferenceMode::Full, false,
+                                      "sponza_sun_full_96x54", 16);
+}
+
 }  // namespace
 
 TEST(ProbesAccuracy, EmptyCornellBoxOneBounceMean) {
@@ -66,9 +76,7 @@ TEST(ProbesAccuracy, SponzaSmallFullImageSsim) {
   std::optional<Scene> sponza = test::loadSponza(why);
   if (!sponza) GTEST_SKIP() << why;
   const Scene& s = *sponza;
-  test::AccuracyPair p = test::renderAgainstReference(
-      s, "probes", 96, 54, {"probes.update=static", "probes.rebuild_updates=8", "probes.rays=128", "shadow.resolution=1024"},
-      false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
+  test::AccuracyPair p = sponzaAgainstReference(s, {});
   double ssim = displaySsim(p, s);
   std::printf("Sponza 96x54, sun, direct + probes 8x8x4 vs full reference: SSIM %.4f (bound 0.79; issue "
               "target 0.85 not met), mean %.5f vs %.5f\n", ssim,
@@ -81,11 +89,7 @@ TEST(ProbesAccuracy, SponzaDenseGridFullImageSsim) {
   std::optional<Scene> sponza = test::loadSponza(why);
   if (!sponza) GTEST_SKIP() << why;
   const Scene& s = *sponza;
-  test::AccuracyPair p = test::renderAgainstReference(
-      s, "probes", 96, 54,
-      {"probes.update=static", "probes.rebuild_updates=8", "probes.rays=128", "shadow.resolution=1024", "probes.grid_x=32",
-       "probes.grid_y=16", "probes.grid_z=32"},
-      false, ReferenceMode::Full, false, "sponza_sun_full_96x54", 16);
+  test::AccuracyPair p = sponzaAgainstReference(s, {"probes.grid_x=32", "probes.grid_y=16", "probes.grid_z=32"});
   double ssim = displaySsim(p, s);
   std::printf("Sponza 96x54, sun, direct + probes 32x16x32 vs full reference: SSIM %.4f (bound 0.85, the issue's "
               "target), mean %.5f vs %.5f\n", ssim, meanOf(p.raster), meanOf(p.reference));

@@ -103,7 +103,7 @@ TechniqueInfo probesTechniqueInfo() {
             p.addFloat("probes.hysteresis", 0.97, 0.0, 1.0,
                        "weight of the previous value in a dynamic update of a probe (DDGI; per update of that probe)");
             p.addInt("probes.update_budget", 0, 0, 64 * 64 * 64,
-                     "dynamic: probes updated per frame, round-robin in index order (the first frame updates all); "
+                     "dynamic: probes updated per frame, round-robin in an order spread over the grid (the first frame updates all); "
                      "0 or more than the grid's probes = all (read at setup)");
             p.addInt("probes.rebuild_updates", 32, 1, 4096, "static: updates averaged in the full rebuild (each adds a bounce)");
             p.addBool("probes.multibounce", true, "ray hits gather the probes' own irradiance (infinite bounces over updates)");
