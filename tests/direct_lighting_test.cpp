@@ -4,7 +4,10 @@
 
 #include <cmath>
 
+#include <glm/gtc/type_ptr.hpp>
+
 #include "render/renderer.h"
+#include "render/views.h"
 #include "scene_builders.h"
 #include "test_support.h"
 
@@ -118,6 +121,51 @@ TEST(DirectLighting, SunOnPlaneAndShadowOfABlocker) {
   }
   EXPECT_GT(lit, 500);
   EXPECT_GT(shadowed, 50);
+}
+
+// The sun's shadow view (render/views.h, makeDirectionalShadowView): every corner of the bounds
+// lies on the map with at least two texels of margin and within its depth range, the texels are
+// square with side texel_world_size, the map holds about size² texels (no side above 4·size), and
+// its texels are no larger than those of the square map around the bounding sphere.
+TEST(DirectLighting, SunShadowViewFitsTheBoundsWithSquareTexels) {
+  const int size = 512;
+  const Bounds boxes[] = {{glm::vec3(-1.0f), glm::vec3(1.0f)},
+                          {glm::vec3(-26.8f, 2.3f, -16.5f), glm::vec3(24.2f, 23.6f, 14.9f)},  // Sponza's
+                          {glm::vec3(-50.0f, 0.0f, -1.0f), glm::vec3(50.0f, 0.1f, 1.0f)}};
+  const glm::vec3 directions[] = {{0, -1, 0}, {0.3f, -1.0f, 0.1f}, {1, -0.05f, 0.02f}, {0, 0, 1}, {-0.6f, -0.5f, 0.7f}};
+  for (const Bounds& b : boxes)
+    for (const glm::vec3& d : directions) {
+      SCOPED_TRACE(::testing::Message() << "direction " << d.x << " " << d.y << " " << d.z << ", bounds extent "
+                                        << b.hi.x - b.lo.x << " " << b.hi.y - b.lo.y << " " << b.hi.z - b.lo.z);
+      GiView v = makeDirectionalShadowView(d, b, size);
+      ASSERT_TRUE(v.orthographic);
+      EXPECT_LE(v.width, 4 * size);
+      EXPECT_LE(v.height, 4 * size);
+      EXPECT_LE(double(v.width) * v.height, double(size) * size + 5.0 * (v.width + v.height) + 25.0);
+      EXPECT_LE(v.texel_world_size, makeDirectionalLightView(d, b, size).texel_world_size * 1.0001f);
+      glm::mat4 view = glm::make_mat4(v.view), viewProj = glm::make_mat4(v.view_proj);
+      auto texelOf = [&](glm::vec3 p) {
+        glm::vec4 c = viewProj * glm::vec4(p, 1.0f);
+        return glm::vec2((c.x / c.w * 0.5f + 0.5f) * float(v.width), (0.5f - c.y / c.w * 0.5f) * float(v.height));
+      };
+      for (int i = 0; i < 8; ++i) {
+        glm::vec3 corner((i & 1) ? b.hi.x : b.lo.x, (i & 2) ? b.hi.y : b.lo.y, (i & 4) ? b.hi.z : b.lo.z);
+        glm::vec2 t = texelOf(corner);
+        EXPECT_GE(t.x, 1.99f) << "corner " << i;
+        EXPECT_GE(t.y, 1.99f) << "corner " << i;
+        EXPECT_LE(t.x, float(v.width) - 1.99f) << "corner " << i;
+        EXPECT_LE(t.y, float(v.height) - 1.99f) << "corner " << i;
+        float depth = -(view * glm::vec4(corner, 1.0f)).z;
+        EXPECT_GT(depth, v.znear) << "corner " << i;
+        EXPECT_LT(depth, v.zfar) << "corner " << i;
+      }
+      // One texel_world_size along the view's x and y axes is one texel on the map.
+      glm::mat4 toWorld = glm::inverse(view);
+      glm::vec3 c = b.center(), ax(toWorld * glm::vec4(1, 0, 0, 0)), ay(toWorld * glm::vec4(0, 1, 0, 0));
+      glm::vec2 t0 = texelOf(c), tx = texelOf(c + ax * v.texel_world_size), ty = texelOf(c + ay * v.texel_world_size);
+      EXPECT_NEAR(tx.x - t0.x, 1.0f, 1e-3f);
+      EXPECT_NEAR(std::abs(ty.y - t0.y), 1.0f, 1e-3f);
+    }
 }
 
 TEST(DirectLighting, RsmFluxOfSunOnFloorEqualsAlbedoTimesIrradianceTimesArea) {

@@ -32,7 +32,7 @@ bool usesCube(const GiLight& l) {
 }  // namespace
 
 std::vector<GiView> shadowViewsForLight(const GiLight& l, const Bounds& bounds, const ShadowSettings& s) {
-  if (l.type == GI_LIGHT_DIRECTIONAL) return {makeDirectionalLightView(vec3Of(l.direction), bounds, s.resolution)};
+  if (l.type == GI_LIGHT_DIRECTIONAL) return {makeDirectionalShadowView(vec3Of(l.direction), bounds, s.resolution)};
   glm::vec3 pos = vec3Of(l.position);
   if (!usesCube(l)) {
     float fov = 2.0f * std::acos(std::clamp(l.cos_outer, -1.0f, 1.0f)) * 1.05f;

@@ -54,6 +54,46 @@ GiView makeDirectionalLightView(const glm::vec3& direction, const Bounds& b, int
   return makeView(view, proj, size, size, true, eye, r * 0.5f, r * 3.5f, 2.0f * r / float(size));
 }
 
+GiView makeDirectionalShadowView(const glm::vec3& direction, const Bounds& b, int size) {
+  glm::vec3 d = glm::normalize(direction);
+  float r = std::max(b.radius(), 1e-3f);
+  glm::vec3 centre = b.center();
+  glm::vec3 eye = centre - d * (2.0f * r);
+  // The light-space footprint of the bounds' 8 corners, for each world axis as the image's up
+  // (an axis-aligned box projects to the smallest rectangle when the image is aligned with it).
+  struct Fit {
+    glm::mat4 view;
+    glm::vec3 lo, hi;
+  };
+  Fit best{};
+  float bestArea = -1.0f;
+  const glm::vec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const glm::vec3& up : axes) {
+    if (glm::length(glm::cross(d, up)) < 1e-3f) continue;
+    Fit f{glm::lookAt(eye, centre, up), glm::vec3(INFINITY), glm::vec3(-INFINITY)};
+    for (int i = 0; i < 8; ++i) {
+      glm::vec3 corner((i & 1) ? b.hi.x : b.lo.x, (i & 2) ? b.hi.y : b.lo.y, (i & 4) ? b.hi.z : b.lo.z);
+      glm::vec3 q = glm::vec3(f.view * glm::vec4(corner, 1.0f));
+      f.lo = glm::min(f.lo, q);
+      f.hi = glm::max(f.hi, q);
+    }
+    float area = std::max(f.hi.x - f.lo.x, 1e-3f * r) * std::max(f.hi.y - f.lo.y, 1e-3f * r);
+    if (bestArea < 0.0f || area < bestArea) bestArea = area, best = f;
+  }
+  float ex = std::max(best.hi.x - best.lo.x, 1e-3f * r), ey = std::max(best.hi.y - best.lo.y, 1e-3f * r);
+  // Square texels, size² of them over the footprint, no side longer than 4·size; two texels of
+  // margin on every side so that the 3×3 PCF and the normal offset stay on the map at its edges.
+  int maxSide = 4 * size;
+  float texel = std::max({std::sqrt(ex * ey) / float(size), ex / float(maxSide - 5), ey / float(maxSide - 5)});
+  int width = std::min(maxSide, int(std::ceil(ex / texel)) + 4), height = std::min(maxSide, int(std::ceil(ey / texel)) + 4);
+  float cx = 0.5f * (best.lo.x + best.hi.x), cy = 0.5f * (best.lo.y + best.hi.y);
+  float hx = 0.5f * texel * float(width), hy = 0.5f * texel * float(height);
+  // View-space z is negative in front of the eye; the bounds lie between -hi.z and -lo.z.
+  float znear = std::max(-best.hi.z - 0.01f * r, 1e-4f * r), zfar = -best.lo.z + 0.01f * r;
+  glm::mat4 proj = glm::ortho(cx - hx, cx + hx, cy - hy, cy + hy, znear, zfar);
+  return makeView(best.view, proj, width, height, true, eye, znear, zfar, texel);
+}
+
 GiView makePerspectiveLightView(const glm::vec3& position, const glm::vec3& direction, float fovY, const Bounds& b,
                                 int size) {
   glm::vec3 d = glm::normalize(direction);

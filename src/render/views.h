@@ -20,6 +20,13 @@ GiView makeCameraView(const Camera& camera, int width, int height);
 // (so every point of the scene is inside the view), `size`×`size` texels.
 GiView makeDirectionalLightView(const glm::vec3& direction, const Bounds& bounds, int size);
 
+// Orthographic shadow view looking along `direction`, fitted tightly around the bounds' footprint
+// in the light's image plane (its sides along the world axes that give the smallest footprint)
+// with square texels and about `size`² texels in all (so width ≠ height when the footprint is not
+// square; neither side above 4·size). For the same texel count the texels are smaller than those
+// of makeDirectionalLightView, whose square window holds the whole bounding sphere (docs/RENDERING.md).
+GiView makeDirectionalShadowView(const glm::vec3& direction, const Bounds& bounds, int size);
+
 // Perspective view from `position` along `direction` with full cone angle `fovY` (radians),
 // near/far planes fitted to the scene bounds.
 GiView makePerspectiveLightView(const glm::vec3& position, const glm::vec3& direction, float fovY,
