@@ -83,7 +83,7 @@ GiView makeDirectionalShadowView(const glm::vec3& direction, const Bounds& b, in
   float ex = std::max(best.hi.x - best.lo.x, 1e-3f * r), ey = std::max(best.hi.y - best.lo.y, 1e-3f * r);
   // Square texels, size² of them over the footprint, no side longer than 4·size; two texels of
   // margin on every side so that the 3×3 PCF and the normal offset stay on the map at its edges.
-  int maxSide = 4 * size;
+  int maxSide = std::min(4 * size, 16384);  // the rasterizer's largest view side, as for images
   float texel = std::max({std::sqrt(ex * ey) / float(size), ex / float(maxSide - 5), ey / float(maxSide - 5)});
   int width = std::min(maxSide, int(std::ceil(ex / texel)) + 4), height = std::min(maxSide, int(std::ceil(ey / texel)) + 4);
   float cx = 0.5f * (best.lo.x + best.hi.x), cy = 0.5f * (best.lo.y + best.hi.y);

@@ -23,7 +23,7 @@ GiView makeDirectionalLightView(const glm::vec3& direction, const Bounds& bounds
 // Orthographic shadow view looking along `direction`, fitted tightly around the bounds' footprint
 // in the light's image plane (its sides along the world axes that give the smallest footprint)
 // with square texels and about `size`² texels in all (so width ≠ height when the footprint is not
-// square; neither side above 4·size). For the same texel count the texels are smaller than those
+// square; neither side above 4·size or 16384). For the same texel count the texels are smaller than those
 // of makeDirectionalLightView, whose square window holds the whole bounding sphere (docs/RENDERING.md).
 GiView makeDirectionalShadowView(const glm::vec3& direction, const Bounds& bounds, int size);
 
