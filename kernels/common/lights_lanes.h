@@ -102,3 +102,54 @@ inline floatV shadow_visibilityV(global const GiLight* l, global const GiView* v
   }
   return vis;
 }
+
+// shadow_voxel_view() lane-wise for view `vi` (the same view for every lane): the voxels' boxes
+// have the same half side h.
+inline floatV shadow_voxel_viewV(global const GiView* views, global const uint* offsets, global const float* depths,
+                                 int vi, float3V centre, float h) {
+  global const GiView* v = &views[vi];
+  global const float* m = v->view;
+  float hx = h * (fabs(m[0]) + fabs(m[4]) + fabs(m[8]));
+  float hy = h * (fabs(m[1]) + fabs(m[5]) + fabs(m[9]));
+  float hz = h * (fabs(m[2]) + fabs(m[6]) + fabs(m[10]));
+  floatV depth = -GI_MROW(m, 2, centre);
+  floatV texel = v->orthographic ? (floatV)(v->texel_world_size) : v->texel_world_size * fmax(depth, 0.0f);
+  floatV front = depth - hz - GI_SHADOW_DEPTH_BIAS * texel;
+  floatV cx = GI_MROW(v->view_proj, 0, centre), cy = GI_MROW(v->view_proj, 1, centre), cw = GI_MROW(v->view_proj, 3, centre);
+  float W = (float)v->width, H = (float)v->height;
+  floatV fx = (cx / cw * 0.5f + 0.5f) * W;
+  floatV fy = (0.5f - cy / cw * 0.5f) * H;
+  intV allLit = (cw <= 0.0f) | (texel <= 0.0f);
+  floatV invTexel = 1.0f / GI_SEL(texel, (floatV)(1.0f), allLit);
+  floatV stepX = GI_VOXEL_SHADOW_TAP * hx * invTexel, stepY = GI_VOXEL_SHADOW_TAP * hy * invTexel;
+  global const float* map = depths + offsets[vi];
+  floatV one = (floatV)(1.0f), zero = (floatV)(0.0f);
+  floatV lit = zero;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      floatV tx = fx + (float)dx * stepX, ty = fy + (float)dy * stepY;
+      intV outside = allLit | GI_NOT((tx >= 0.0f) & (ty >= 0.0f) & (tx < W) & (ty < H));
+      intV index = GI_SEL(convert_intV(ty) * v->width + convert_intV(tx), (intV)(0), outside);
+      floatV stored = GI_GATHER(floatV, map, index);
+      lit += GI_SEL(GI_SEL(zero, one, front <= stored), one, outside);
+    }
+  return lit * (1.0f / 9.0f);
+}
+
+inline floatV shadow_voxel_visibilityV(global const GiLight* l, global const GiView* views, global const uint* offsets,
+                                       global const float* depths, float3V centre, float h) {
+  if (l->shadow_map < 0) return (floatV)(1.0f);
+  int vi = l->shadow_map;
+  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
+  if (!cube) return shadow_voxel_viewV(views, offsets, depths, vi, centre, h);
+  float3V d = f3v(centre.x - l->position[0], centre.y - l->position[1], centre.z - l->position[2]);
+  floatV ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
+  intV face = GI_SEL(GI_SEL((intV)(5), (intV)(4), d.z > 0.0f), GI_SEL((intV)(3), (intV)(2), d.y > 0.0f), ay >= az);
+  face = GI_SEL(face, GI_SEL((intV)(1), (intV)(0), d.x > 0.0f), (ax >= ay) & (ax >= az));
+  floatV vis = (floatV)(1.0f);
+  for (int f = 0; f < 6; ++f) {
+    intV here = face == f;
+    if (GI_ANY(here)) vis = GI_SEL(vis, shadow_voxel_viewV(views, offsets, depths, vi + f, centre, h), here);
+  }
+  return vis;
+}

@@ -52,3 +52,54 @@ inline float shadow_visibility(global const GiLight* l, global const GiView* vie
   if (cube) vi += shadow_cube_face(x - vload3(0, l->position));
   return shadow_pcf_view(views, offsets, depths, vi, x, geoNormal);
 }
+
+// Fraction of a voxel's cross-section that the light reaches, for the voxel light injection (vct):
+// the axis-aligned cube of half side h at `centre`, bounded in the view's space by the box
+// centre ± (hx, hy, hz); 3×3 taps at the centres of the 3×3 cells of its x-y footprint on the map,
+// each lit when the first surface the light meets there (the stored depth) is not in front of
+// the box (depth ≥ its front − one texel footprint). The voxel's own surfaces lie inside the box,
+// so they never shadow it (no normal offset or bias of the size of a texel is needed), and
+// occluders in front of it shadow the part of the footprint they cover: a filtered visibility
+// over the whole voxel rather than a point sample of it, which does not depend on the map's
+// texel size (docs/techniques/vct.md, "Light injection").
+#define GI_VOXEL_SHADOW_TAP 0.6666667f  // tap offsets: −⅔, 0, ⅔ of the half-extent
+
+inline float shadow_voxel_view(global const GiView* views, global const uint* offsets, global const float* depths,
+                               int vi, float3 centre, float h) {
+  global const GiView* v = &views[vi];
+  global const float* m = v->view;
+  float hx = h * (fabs(m[0]) + fabs(m[4]) + fabs(m[8]));
+  float hy = h * (fabs(m[1]) + fabs(m[5]) + fabs(m[9]));
+  float hz = h * (fabs(m[2]) + fabs(m[6]) + fabs(m[10]));
+  float depth = -mat4_mul_global(m, (float4)(centre, 1.0f)).z;
+  float texel = v->orthographic ? v->texel_world_size : v->texel_world_size * fmax(depth, 0.0f);
+  float front = depth - hz - GI_SHADOW_DEPTH_BIAS * texel;
+  float4 c = mat4_mul_global(v->view_proj, (float4)(centre, 1.0f));
+  if (c.w <= 0.0f || texel <= 0.0f) return 1.0f;
+  float fx = (c.x / c.w * 0.5f + 0.5f) * (float)v->width;
+  float fy = (0.5f - c.y / c.w * 0.5f) * (float)v->height;
+  float invTexel = 1.0f / texel;
+  float stepX = GI_VOXEL_SHADOW_TAP * hx * invTexel, stepY = GI_VOXEL_SHADOW_TAP * hy * invTexel;
+  global const float* map = depths + offsets[vi];
+  float lit = 0.0f;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      float tx = fx + (float)dx * stepX, ty = fy + (float)dy * stepY;
+      // Outside the map nothing was rendered that could occlude: lit.
+      if (!(tx >= 0.0f && ty >= 0.0f && tx < (float)v->width && ty < (float)v->height)) {
+        lit += 1.0f;
+        continue;
+      }
+      lit += front <= map[(int)ty * v->width + (int)tx] ? 1.0f : 0.0f;
+    }
+  return lit * (1.0f / 9.0f);
+}
+
+inline float shadow_voxel_visibility(global const GiLight* l, global const GiView* views, global const uint* offsets,
+                                     global const float* depths, float3 centre, float h) {
+  if (l->shadow_map < 0) return 1.0f;
+  int vi = l->shadow_map;
+  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
+  if (cube) vi += shadow_cube_face(centre - vload3(0, l->position));
+  return shadow_voxel_view(views, offsets, depths, vi, centre, h);
+}
