@@ -19,6 +19,7 @@
 #include "gi/vct/voxel_scene.h"
 #include "accuracy_support.h"
 #include "reference_scenes.h"
+#include "scene_builders.h"
 #include "render/renderer.h"
 #include "scene/cornell_box.h"
 #include "scene/textures.h"
@@ -816,16 +817,9 @@ Scene floorWithBlocker() {
   Scene s = sunlitPlane(glm::vec3(0.5f), 0.0f, glm::vec3(0.3f, -1.0f, 0.2f), glm::vec3(2.0f));
   s.materials.push_back(test::diffuseMaterial(0.5f, 0.5f, 0.5f));
   s.materials.back().double_sided = 1;
-  glm::vec3 a(-1.2f, 0.6f, -1.2f), b(0.0f, 0.6f, -1.2f), c(0.0f, 0.6f, 1.2f), d(-1.2f, 0.6f, 1.2f);
-  test::addTriangle(s, a, d, c, 1);
-  test::addTriangle(s, a, c, b, 1);
+  test::addQuad(s, glm::vec3(-1.2f, 0.6f, 1.2f), glm::vec3(1.2f, 0, 0), glm::vec3(0, 0, -2.4f), 1);
   s.computeBounds();
-  s.lights[0].shadow_map = 0;
-  Camera cam;
-  cam.position = glm::vec3(0, 2.5f, 3.0f);
-  cam.target = glm::vec3(0, 0, 0);
-  cam.yfov = 0.9f;
-  s.cameras.push_back(cam);
+  s.cameras.push_back(test::lookAtCamera(glm::vec3(0, 2.5f, 3.0f), glm::vec3(0), 0.9f));
   return s;
 }
 
@@ -922,34 +916,18 @@ Scene blocksUnderSun() {
   Scene s;
   s.name = "blocks";
   s.materials.push_back(test::diffuseMaterial(0.6f, 0.6f, 0.6f));
-  auto quad = [&](glm::vec3 c, glm::vec3 u, glm::vec3 v) {  // facing u × v
-    test::addTriangle(s, c, c + u, c + u + v, 0);
-    test::addTriangle(s, c, c + u + v, c + v, 0);
-  };
-  quad(glm::vec3(-2, 0, 2), glm::vec3(4, 0, 0), glm::vec3(0, 0, -4));
+  test::addQuad(s, glm::vec3(-2, 0, 2), glm::vec3(4, 0, 0), glm::vec3(0, 0, -4), 0);
   for (int i = 0; i < 9; ++i) {
     float x0 = -1.5f + 1.2f * float(i % 3), z0 = -1.5f + 1.2f * float(i / 3), a = 0.45f, h = 0.3f + 0.25f * float(i % 4);
-    quad(glm::vec3(x0, h, z0 + a), glm::vec3(a, 0, 0), glm::vec3(0, 0, -a));      // +y
-    quad(glm::vec3(x0 + a, 0, z0 + a), glm::vec3(0, 0, -a), glm::vec3(0, h, 0));  // +x
-    quad(glm::vec3(x0, 0, z0), glm::vec3(0, 0, a), glm::vec3(0, h, 0));           // −x
-    quad(glm::vec3(x0, 0, z0 + a), glm::vec3(a, 0, 0), glm::vec3(0, h, 0));       // +z
-    quad(glm::vec3(x0 + a, 0, z0), glm::vec3(-a, 0, 0), glm::vec3(0, h, 0));      // −z
+    test::addQuad(s, glm::vec3(x0, h, z0 + a), glm::vec3(a, 0, 0), glm::vec3(0, 0, -a), 0);      // +y
+    test::addQuad(s, glm::vec3(x0 + a, 0, z0 + a), glm::vec3(0, 0, -a), glm::vec3(0, h, 0), 0);  // +x
+    test::addQuad(s, glm::vec3(x0, 0, z0), glm::vec3(0, 0, a), glm::vec3(0, h, 0), 0);           // −x
+    test::addQuad(s, glm::vec3(x0, 0, z0 + a), glm::vec3(a, 0, 0), glm::vec3(0, h, 0), 0);       // +z
+    test::addQuad(s, glm::vec3(x0 + a, 0, z0), glm::vec3(-a, 0, 0), glm::vec3(0, h, 0), 0);      // −z
   }
   s.computeBounds();
-  GiLight sun{};
-  sun.type = GI_LIGHT_DIRECTIONAL;
-  glm::vec3 d = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
-  for (int k = 0; k < 3; ++k) {
-    sun.direction[k] = d[k];
-    sun.intensity[k] = 2.0f;
-  }
-  sun.shadow_map = 0;
-  s.lights.push_back(sun);
-  Camera cam;
-  cam.position = glm::vec3(0, 3, 4);
-  cam.target = glm::vec3(0, 0, 0);
-  cam.yfov = 0.9f;
-  s.cameras.push_back(cam);
+  s.lights.push_back(test::directionalLight(glm::vec3(0.3f, -1.0f, 0.2f), glm::vec3(2.0f)));
+  s.cameras.push_back(test::lookAtCamera(glm::vec3(0, 3, 4), glm::vec3(0), 0.9f));
   return s;
 }
 

@@ -84,6 +84,14 @@ inline floatV shadow_pcf_viewV(global const GiView* views, global const uint* of
   return GI_SEL(lit * (1.0f / 9.0f), one, lit1);
 }
 
+// shadow_cube_face() lane-wise: the cube face of a point light's shadow map that sees x.
+inline intV shadow_cube_faceV(global const GiLight* l, float3V x) {
+  float3V d = f3v(x.x - l->position[0], x.y - l->position[1], x.z - l->position[2]);
+  floatV ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
+  intV face = GI_SEL(GI_SEL((intV)(5), (intV)(4), d.z > 0.0f), GI_SEL((intV)(3), (intV)(2), d.y > 0.0f), ay >= az);
+  return GI_SEL(face, GI_SEL((intV)(1), (intV)(0), d.x > 0.0f), (ax >= ay) & (ax >= az));
+}
+
 inline floatV shadow_visibilityV(global const GiLight* l, global const GiView* views, global const uint* offsets,
                                  global const float* depths, float3V x, float3V ng) {
   if (l->shadow_map < 0) return (floatV)(1.0f);
@@ -91,10 +99,7 @@ inline floatV shadow_visibilityV(global const GiLight* l, global const GiView* v
   bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
   if (!cube) return shadow_pcf_viewV(views, offsets, depths, vi, x, ng);
   // shadow_cube_face() per lane; each face present among the lanes is evaluated once.
-  float3V d = f3v(x.x - l->position[0], x.y - l->position[1], x.z - l->position[2]);
-  floatV ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
-  intV face = GI_SEL(GI_SEL((intV)(5), (intV)(4), d.z > 0.0f), GI_SEL((intV)(3), (intV)(2), d.y > 0.0f), ay >= az);
-  face = GI_SEL(face, GI_SEL((intV)(1), (intV)(0), d.x > 0.0f), (ax >= ay) & (ax >= az));
+  intV face = shadow_cube_faceV(l, x);
   floatV vis = (floatV)(1.0f);
   for (int f = 0; f < 6; ++f) {
     intV here = face == f;
@@ -142,10 +147,7 @@ inline floatV shadow_voxel_visibilityV(global const GiLight* l, global const GiV
   int vi = l->shadow_map;
   bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
   if (!cube) return shadow_voxel_viewV(views, offsets, depths, vi, centre, h);
-  float3V d = f3v(centre.x - l->position[0], centre.y - l->position[1], centre.z - l->position[2]);
-  floatV ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
-  intV face = GI_SEL(GI_SEL((intV)(5), (intV)(4), d.z > 0.0f), GI_SEL((intV)(3), (intV)(2), d.y > 0.0f), ay >= az);
-  face = GI_SEL(face, GI_SEL((intV)(1), (intV)(0), d.x > 0.0f), (ax >= ay) & (ax >= az));
+  intV face = shadow_cube_faceV(l, centre);
   floatV vis = (floatV)(1.0f);
   for (int f = 0; f < 6; ++f) {
     intV here = face == f;
