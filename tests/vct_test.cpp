@@ -639,6 +639,16 @@ float hostCoverage(glm::vec3 meanN, int dir, bool slab) {
   return slab ? 1.0f - back : front;
 }
 
+// A 32×32 direct-lit frame: what the injection tests render for the shadow maps.
+RenderSettings smallDirectFrame(int shadowResolution) {
+  RenderSettings rs;
+  rs.width = 32;
+  rs.height = 32;
+  rs.technique = "direct";
+  rs.sets = {"shadow.resolution=" + std::to_string(shadowResolution)};
+  return rs;
+}
+
 }  // namespace
 
 TEST(VctInject, LitPlaneGetsAlbedoOverPiTimesIrradiance) {
@@ -736,12 +746,7 @@ TEST(VctInject, LanesMatchOneVoxelAtATime) {
         s.lights[0].intensity[k] = 2.0f;
       }
     }
-    RenderSettings rs;
-    rs.width = 32;
-    rs.height = 32;
-    rs.technique = "direct";
-    rs.sets = {"shadow.resolution=256"};
-    Renderer r(ctx, s, rs);
+    Renderer r(ctx, s, smallDirectFrame(256));
     r.renderFrame();
     const DeviceScene& ds = r.deviceScene();
     VoxelScene vs(ctx, s, 32);
@@ -835,12 +840,7 @@ TEST(VctInject, VoxelVisibilityMatchesHostMirror) {
   Scene s = floorWithBlocker();
   for (int resolution : {256, 2048}) {
     SCOPED_TRACE(::testing::Message() << "shadow.resolution " << resolution);
-    RenderSettings rs;
-    rs.width = 32;
-    rs.height = 32;
-    rs.technique = "direct";
-    rs.sets = {"shadow.resolution=" + std::to_string(resolution)};
-    Renderer r(ctx, s, rs);
+    Renderer r(ctx, s, smallDirectFrame(resolution));
     r.renderFrame();
     const DeviceScene& ds = r.deviceScene();
     VoxelScene vs(ctx, s, 32);
@@ -894,12 +894,7 @@ namespace {
 // shadow maps at `resolution`² texels.
 double injectedRadianceSum(const Scene& s, int N, int resolution) {
   cl::Context& ctx = test::context();
-  RenderSettings rs;
-  rs.width = 32;
-  rs.height = 32;
-  rs.technique = "direct";
-  rs.sets = {"shadow.resolution=" + std::to_string(resolution)};
-  Renderer r(ctx, s, rs);
+  Renderer r(ctx, s, smallDirectFrame(resolution));
   r.renderFrame();
   VoxelScene vs(ctx, s, N);
   vs.voxelize(r.deviceScene());
