@@ -15,9 +15,10 @@
 //     reference (measured −6.8 %: the GGX lobe of the indirect light, which VPLs do not carry).
 //   - Sponza (small, 96×54) with its sun, full image, 2048-spp reference, `vpl` N = 1024 with 3
 //     further generations (vpl.bounces=3) and visibility rays: the diffuse gather alone asserted
-//     ≥ 0.88 (measured 0.8945; an exact diffuse indirect term on our direct pass scores 0.892, so no
-//     diffuse gather reaches 0.9); with the receivers' GGX lobe (vpl.specular=true) asserted
-//     ≥ 0.90 = the target (measured 0.9169). One-bounce `vpl` N = 256 scored 0.791
+//     ≥ 0.88 (measured 0.8930; 0.8945 before 3 Dec's fitted sun shadow map; an exact diffuse
+//     indirect term on our direct pass scores 0.892, so no diffuse gather reaches 0.9); with the
+//     receivers' GGX lobe (vpl.specular=true) asserted ≥ 0.90 = the target (measured
+//     0.9177; 0.9169 before). One-bounce `vpl` N = 256 scored 0.791
 //     (docs/techniques/vpl.md). Skipped without media.
 // The rasterized images are rendered at 2×2 the size and box-filtered down (the path tracer
 // integrates over each pixel's area). References come from tests/reference_store.h (stored, converged,
