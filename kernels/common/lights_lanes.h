@@ -114,9 +114,8 @@ inline floatV shadow_voxel_viewV(global const GiView* views, global const uint* 
                                  int vi, float3V centre, float h) {
   global const GiView* v = &views[vi];
   global const float* m = v->view;
-  float hx = h * (fabs(m[0]) + fabs(m[4]) + fabs(m[8]));
-  float hy = h * (fabs(m[1]) + fabs(m[5]) + fabs(m[9]));
-  float hz = h * (fabs(m[2]) + fabs(m[6]) + fabs(m[10]));
+  float3 extent = shadow_view_box_half(m, h);
+  float hx = extent.x, hy = extent.y, hz = extent.z;
   floatV depth = -GI_MROW(m, 2, centre);
   floatV texel = v->orthographic ? (floatV)(v->texel_world_size) : v->texel_world_size * fmax(depth, 0.0f);
   floatV front = depth - hz - GI_SHADOW_DEPTH_BIAS * texel;

@@ -44,13 +44,18 @@ inline float shadow_pcf_view(global const GiView* views, global const uint* offs
   return lit * (1.0f / 9.0f);
 }
 
+// The shadow view of light l that sees x (its cube face for point and wide spot lights), −1 when
+// the light casts no shadow.
+inline int shadow_view_index(global const GiLight* l, float3 x) {
+  if (l->shadow_map < 0) return -1;
+  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
+  return l->shadow_map + (cube ? shadow_cube_face(x - vload3(0, l->position)) : 0);
+}
+
 inline float shadow_visibility(global const GiLight* l, global const GiView* views, global const uint* offsets,
                                global const float* depths, float3 x, float3 geoNormal) {
-  if (l->shadow_map < 0) return 1.0f;
-  int vi = l->shadow_map;
-  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
-  if (cube) vi += shadow_cube_face(x - vload3(0, l->position));
-  return shadow_pcf_view(views, offsets, depths, vi, x, geoNormal);
+  int vi = shadow_view_index(l, x);
+  return vi < 0 ? 1.0f : shadow_pcf_view(views, offsets, depths, vi, x, geoNormal);
 }
 
 // Fraction of a voxel's cross-section that the light reaches, for the voxel light injection (vct):
@@ -64,13 +69,19 @@ inline float shadow_visibility(global const GiLight* l, global const GiView* vie
 // texel size (docs/techniques/vct.md, "Light injection").
 #define GI_VOXEL_SHADOW_TAP 0.6666667f  // tap offsets: −⅔, 0, ⅔ of the half-extent
 
+// Half-extents along the view's x, y and z axes of the axis-aligned cube of half side h, for the
+// view matrix m (column-major; its rotation rows).
+inline float3 shadow_view_box_half(global const float* m, float h) {
+  return h * (float3)(fabs(m[0]) + fabs(m[4]) + fabs(m[8]), fabs(m[1]) + fabs(m[5]) + fabs(m[9]),
+                      fabs(m[2]) + fabs(m[6]) + fabs(m[10]));
+}
+
 inline float shadow_voxel_view(global const GiView* views, global const uint* offsets, global const float* depths,
                                int vi, float3 centre, float h) {
   global const GiView* v = &views[vi];
   global const float* m = v->view;
-  float hx = h * (fabs(m[0]) + fabs(m[4]) + fabs(m[8]));
-  float hy = h * (fabs(m[1]) + fabs(m[5]) + fabs(m[9]));
-  float hz = h * (fabs(m[2]) + fabs(m[6]) + fabs(m[10]));
+  float3 extent = shadow_view_box_half(m, h);
+  float hx = extent.x, hy = extent.y, hz = extent.z;
   float depth = -mat4_mul_global(m, (float4)(centre, 1.0f)).z;
   float texel = v->orthographic ? v->texel_world_size : v->texel_world_size * fmax(depth, 0.0f);
   float front = depth - hz - GI_SHADOW_DEPTH_BIAS * texel;
@@ -97,9 +108,6 @@ inline float shadow_voxel_view(global const GiView* views, global const uint* of
 
 inline float shadow_voxel_visibility(global const GiLight* l, global const GiView* views, global const uint* offsets,
                                      global const float* depths, float3 centre, float h) {
-  if (l->shadow_map < 0) return 1.0f;
-  int vi = l->shadow_map;
-  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
-  if (cube) vi += shadow_cube_face(centre - vload3(0, l->position));
-  return shadow_voxel_view(views, offsets, depths, vi, centre, h);
+  int vi = shadow_view_index(l, centre);
+  return vi < 0 ? 1.0f : shadow_voxel_view(views, offsets, depths, vi, centre, h);
 }
