@@ -112,14 +112,16 @@ struct ConeOut {
   std::vector<float> occlusion;
 };
 
-// sh: read the SH voxels (vct.voxels=sh) instead of the isotropic radiance.
-// Directional voxels when vs was built with them (VoxelScene::directional).
+// sh: read the SH voxels (vct.voxels=sh) instead of the isotropic radiance. borderEdge: the
+// grid's border repeats its edge voxels (vct.border=edge). Directional voxels when vs was built
+// with them (VoxelScene::directional).
 ConeOut traceCones(VoxelScene& vs, const TraceParams& tp, const std::vector<glm::vec4>& cones,
-                   const std::vector<glm::vec4>& dirs, bool sh = false) {
+                   const std::vector<glm::vec4>& dirs, bool sh = false, bool borderEdge = false) {
   cl::Context& ctx = test::context();
   cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
                                       {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"},
-                                       {"GI_VCT_DIRECTIONAL", vs.directional() ? "1" : "0"}});
+                                       {"GI_VCT_DIRECTIONAL", vs.directional() ? "1" : "0"},
+                                       {"GI_VCT_BORDER_EDGE", borderEdge ? "1" : "0"}});
   cl::Kernel k = prog.kernel("vct_trace_cones");
   cl::Buffer c = ctx.upload(cones, "cones"), d = ctx.upload(dirs, "dirs");
   cl::Buffer out(ctx, cones.size() * 16), occ(ctx, cones.size() * 4);
@@ -144,10 +146,14 @@ struct HostMips {
   std::vector<glm::vec4> iso, aniso;
   bool shVoxels = false;            // radiance from the SH chains (3 float4 per voxel), opacity from iso/aniso
   std::vector<glm::vec4> sh, shAniso;
-  // Trilinear filter of fetch(voxel index) over a volume of n³ voxels (outside: 0).
+  bool borderEdge = false;  // vct.border=edge: positions clamped to the outermost voxel centres
+  // Trilinear filter of fetch(voxel index) over a volume of n³ voxels (outside: 0, or with
+  // borderEdge the edge voxels).
   template <class Fetch>
-  static glm::vec4 trilinear(int n, glm::vec3 p, float scale, Fetch fetch) {
-    glm::vec3 u = p * scale - 0.5f, fl = glm::floor(u), f = u - fl;
+  glm::vec4 trilinear(int n, glm::vec3 p, float scale, Fetch fetch) const {
+    glm::vec3 u = p * scale - 0.5f;
+    if (borderEdge) u = glm::clamp(u, glm::vec3(0.0f), glm::vec3(float(n - 1)));
+    glm::vec3 fl = glm::floor(u), f = u - fl;
     glm::ivec3 i0(fl);
     glm::vec4 acc(0.0f);
     for (int dz = 0; dz < 2; ++dz)
@@ -1089,18 +1095,51 @@ TEST(VctCone, MarchMatchesHostMirror) {
     vs.buildMips(an);
     h.iso = ctx.download<glm::vec4>(vs.iso());
     if (an) h.aniso = ctx.download<glm::vec4>(vs.aniso());
-    TraceParams tp;
-    tp.anisotropic = an;
-    tp.stepFactor = 0.4f;
-    ConeOut dev = traceCones(vs, tp, cones, dirs);
-    float worst = 0;
-    for (size_t i = 0; i < cones.size(); ++i) {
-      glm::vec4 ref = h.cone(glm::vec3(cones[i]), glm::vec3(dirs[i]), cones[i].w, dirs[i].w, tp.stepFactor, an);
-      for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(ref[c] - dev.radiance[i][c]));
+    for (bool edge : {false, true}) {  // vct.border=zero / edge
+      h.borderEdge = edge;
+      TraceParams tp;
+      tp.anisotropic = an;
+      tp.stepFactor = 0.4f;
+      ConeOut dev = traceCones(vs, tp, cones, dirs, false, edge);
+      float worst = 0;
+      for (size_t i = 0; i < cones.size(); ++i) {
+        glm::vec4 ref = h.cone(glm::vec3(cones[i]), glm::vec3(dirs[i]), cones[i].w, dirs[i].w, tp.stepFactor, an);
+        for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(ref[c] - dev.radiance[i][c]));
+      }
+      std::printf("%s cones, border %s, vs host march: max abs difference %.2e\n", an ? "anisotropic" : "isotropic",
+                  edge ? "edge" : "zero", worst);
+      EXPECT_LT(worst, 2e-4f);
     }
-    std::printf("%s cones vs host march: max abs difference %.2e\n", an ? "anisotropic" : "isotropic", worst);
-    EXPECT_LT(worst, 2e-4f);
   }
+}
+
+TEST(VctCone, BorderEdgeShowsAWallAtTheBorderWhole) {
+  // A lit opaque wall in the grid's last voxel layer (x = N − 1) and a wide cone (tan ½θ = 0.6)
+  // along +x from the far side of the grid, anisotropic mips (which keep the wall opaque along x
+  // at every level; isotropic ones dilute a one-voxel wall anyway, vct.md point 5): the cone's
+  // last sample, at level 5 (one voxel), reaches past the border. With vct.border=zero the taps
+  // past it are empty and dilute the wall: the cone leaves the grid unsaturated. With edge they
+  // repeat the wall: the cone saturates (a ≥ 0.99) and carries the wall's radiance.
+  cl::Context& ctx = test::context();
+  Scene s = boundsScene(glm::vec3(0), glm::vec3(1));
+  const int N = 32;
+  VoxelScene vs(ctx, s, N);
+  std::vector<glm::vec4> level0(size_t(N) * N * N, glm::vec4(0.0f));
+  for (int z = 0; z < N; ++z)
+    for (int y = 0; y < N; ++y) level0[(size_t(z) * N + y) * N + N - 1] = glm::vec4(0.5f, 0.4f, 0.3f, 1.0f);
+  writeLevel0(ctx, vs, level0);
+  std::vector<glm::vec4> cones = {glm::vec4(2.0f, 16.0f, 16.0f, 0.6f)}, dirs = {glm::vec4(1, 0, 0, 64.0f)};
+  vs.buildMips(true);
+  TraceParams tp;
+  tp.anisotropic = 1;
+  tp.specularLevelSteps = 1;  // vct_trace_cones: the level-aligned march
+  glm::vec4 zero = traceCones(vs, tp, cones, dirs, false, false).radiance[0];
+  glm::vec4 edge = traceCones(vs, tp, cones, dirs, false, true).radiance[0];
+  std::printf("cone into a wall at the border: border zero a = %.3f, radiance %.3f; edge a = %.3f, radiance %.3f "
+              "(wall 0.5)\n", zero.w, zero.x, edge.w, edge.x);
+  EXPECT_LT(zero.w, 0.9f);
+  EXPECT_GE(edge.w, 0.99f);
+  EXPECT_NEAR(edge.x / edge.w, 0.5f, 0.01f);
 }
 
 TEST(Vct, FramesAreBitIdentical) {
@@ -1451,13 +1490,15 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
     cl::Buffer bPos = ctx.upload(pos, "positions"), bNrm = ctx.upload(nrm, "normals");
     // The device's lane count, and 1 (the GPU code path).
     for (int lanes : {cl::gatherVectorWidth(ctx), 1}) {
-      // Voxel kinds: 0 isotropic, 1 SH, 2 directional (anisotropic mips only).
-      for (int kind = 0; kind < 3; ++kind) {
-        int sh = kind == 1, directional = kind == 2;
+      // Voxel kinds: 0 isotropic, 1 SH, 2 directional (anisotropic mips only), 3 isotropic with
+      // vct.border=edge (the lookups' positions clamped in the stencil, vct_stencil_lanes).
+      for (int kind = 0; kind < 4; ++kind) {
+        int sh = kind == 1, directional = kind == 2, edge = kind == 3;
         VoxelScene& v = directional ? vsDirectional : vs;
         cl::Program prog = ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
                                             {{"GI_VCT_CONES", "6"}, {"GI_DOWN", "1"}, {"GI_VCT_SH", sh ? "1" : "0"},
                                              {"GI_VCT_DIRECTIONAL", directional ? "1" : "0"},
+                                             {"GI_VCT_BORDER_EDGE", edge ? "1" : "0"},
                                              {"GI_VW", std::to_string(lanes)}});
         cl::Kernel diffuse = prog.kernel("vct_diffuse"), points = prog.kernel("vct_irradiance_points");
         for (int an = directional; an < 2; ++an) {
@@ -1494,9 +1535,9 @@ TEST(VctCone, DiffuseLanesMatchOneConeAtATime) {
             std::printf("diffuse cones, %s, %d lanes vs one cone at a time (%s voxels, %s mips, %s): max abs "
                         "difference %.2e (largest %.3f)\n", surface ? "surface" : "random points", lanes,
                         sh ? "SH" : directional ? "directional" : "isotropic", an ? "anisotropic" : "isotropic",
-                        variant == 0   ? "continuous march"
-                        : variant == 1 ? "footprint in front + AO"
-                                       : "level steps + AO",
+                        variant == 0   ? (edge ? "continuous march, border edge" : "continuous march")
+                        : variant == 1 ? (edge ? "footprint in front + AO, border edge" : "footprint in front + AO")
+                                       : (edge ? "level steps + AO, border edge" : "level steps + AO"),
                         worst, largest);
             EXPECT_GT(largest, 0.05f);
             EXPECT_LT(worst, 2e-4f * std::max(1.0f, largest));

@@ -266,7 +266,8 @@ __attribute__((always_inline)) inline void vct_add_pair(RgbaV* acc, floatV w0, f
 // n / N, per lane: the tap pair along x of each (y, z) row starts at xs = clamp(ix, 0, n − 2) with
 // weights wFirst, wSecond (each tap's weight moved to its place in the pair; a tap outside the
 // volume weighs 0, and so does the pair's other record); rows yr, zr clamped into the volume with
-// weights wy, wz (0 outside).
+// weights wy, wz (0 outside). With GI_VCT_BORDER_EDGE the position is first clamped to the
+// outermost voxel centres (vox_trilinear_taps), so no tap is outside.
 typedef struct {
   intV xs, yr[2], zr[2];
   floatV wFirst, wSecond, wy[2], wz[2];
@@ -275,6 +276,14 @@ typedef struct {
 __attribute__((always_inline)) inline VctStencilV vct_stencil_lanes(float3V p, floatV scale, intV n) {
   VctStencilV st;
   floatV ux = p.x * scale - 0.5f, uy = p.y * scale - 0.5f, uz = p.z * scale - 0.5f;
+#if GI_VCT_BORDER_EDGE
+  {
+    floatV zero = (floatV)(0.0f), last = convert_floatV(n - 1);  // two vectors: see min/max below
+    ux = fmin(fmax(ux, zero), last);
+    uy = fmin(fmax(uy, zero), last);
+    uz = fmin(fmax(uz, zero), last);
+  }
+#endif
   floatV flx = floor(ux), fly = floor(uy), flz = floor(uz);
   floatV fx = ux - flx, fy = uy - fly, fz = uz - flz;
   intV ix = convert_intV(flx), iy = convert_intV(fly), iz = convert_intV(flz);

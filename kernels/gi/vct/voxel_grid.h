@@ -83,11 +83,23 @@ typedef struct {
 #define GI_VCT_SH 0
 #endif
 
+#ifndef GI_VCT_BORDER_EDGE
+#define GI_VCT_BORDER_EDGE 0
+#endif
+
 // The 8 voxels and weights of a trilinear lookup in a volume of n³ voxels at p, given in level-0
-// voxel units from the grid corner; `scale` = 1 / 2^level. Voxels outside the volume get weight 0
-// (and index 0).
+// voxel units from the grid corner; `scale` = 1 / 2^level. The grid's border (vct.border):
+//   zero (GI_VCT_BORDER_EDGE = 0): voxels outside the volume are empty (weight 0, index 0), so a
+//     sample whose filter reaches past the grid is diluted by the empty outside;
+//   edge (GI_VCT_BORDER_EDGE = 1): the position is clamped to the outermost voxel centres (a 3D
+//     texture's clamp-to-edge), so the outside repeats the edge voxels: what a ray leaving the grid
+//     meets first. At the coarse levels every sample reaches past the grid (level log2 N is one
+//     voxel), and a cone that ends on a wall at the grid's border sees it at full opacity.
 inline void vox_trilinear_taps(int n, float3 p, float scale, size_t idx[8], float w[8]) {
   float3 u = p * scale - 0.5f;
+#if GI_VCT_BORDER_EDGE
+  u = clamp(u, 0.0f, (float)(n - 1));
+#endif
   float3 fl = floor(u);
   float3 f = u - fl;
   int3 i0 = convert_int3(fl);

@@ -47,6 +47,7 @@ public:
     int cones = std::stoi(p.getChoice("vct.cones"));
     int down = p.getInt("vct.downsample");
     bool sh = p.getChoice("vct.voxels") == "sh";
+    bool borderEdge = p.getChoice("vct.border") == "edge";
     VoxelScene::Directional kind = directionalVoxels(p);
     bool directional = kind != VoxelScene::Directional::Off;
     if (directional && !anisotropic)
@@ -57,12 +58,14 @@ public:
       voxelized_ = false;
     }
     ShLobe lobe = p.getChoice("vct.sh_lobe") == "cosine" ? ShLobe::Cosine : ShLobe::Hemisphere;
-    if (cones != cones_ || down != down_ || sh != sh_ || directional != directional_) {
+    if (cones != cones_ || down != down_ || sh != sh_ || directional != directional_ ||
+        borderEdge != borderEdge_) {
       program_ = f.ctx.buildProgram("kernels/gi/vct/cone_trace.cl",
                                     cl::withGatherWidth(f.ctx, {{"GI_VCT_CONES", std::to_string(cones)},
                                                                 {"GI_DOWN", std::to_string(down)},
                                                                 {"GI_VCT_SH", sh ? "1" : "0"},
-                                                                {"GI_VCT_DIRECTIONAL", directional ? "1" : "0"}}));
+                                                                {"GI_VCT_DIRECTIONAL", directional ? "1" : "0"},
+                                                                {"GI_VCT_BORDER_EDGE", borderEdge ? "1" : "0"}}));
       lanes_ = cl::gatherVectorWidth(f.ctx);
       diffuse_ = program_.kernel("vct_diffuse");
       specular_ = program_.kernel("vct_specular");
@@ -71,6 +74,7 @@ public:
       down_ = down;
       sh_ = sh;
       directional_ = directional;
+      borderEdge_ = borderEdge;
     }
     const GiVoxelGrid& grid = voxels_->grid();
     float s = grid.voxel_size;
@@ -171,7 +175,7 @@ private:
   cl::Buffer noMap_;               // null: vct_specular without an empty-space map
   cl::Buffer low_, bounced_, direct_;
   int cones_ = 0, down_ = 0, lanes_ = 1;
-  bool sh_ = false, directional_ = false, voxelized_ = false;
+  bool sh_ = false, directional_ = false, borderEdge_ = false, voxelized_ = false;
 };
 
 }  // namespace
@@ -203,6 +207,11 @@ TechniqueInfo vctTechniqueInfo() {
                         "specular cone: steps of at most step_factor diameters that read one mip level each, the "
                         "cone's diameter rounded up to a power of two (levels), or quadrilinear lookups at the "
                         "cone's diameter (continuous; also used with footprint_in_front)");
+            p.addChoice("vct.border", "zero", {"zero", "edge"},
+                        "what a lookup reads past the grid's border: empty voxels (zero), so samples reaching past "
+                        "it are diluted, or the edge voxels (edge, a texture's clamp-to-edge), so a cone ending on a "
+                        "wall at the border sees it whole; edge gains in closed scenes and leaks more; "
+                        "docs/techniques/vct.md, Accuracy point 9");
             p.addFloat("vct.max_distance", 1.0, 0.01, 2.0, "maximum cone length as a fraction of the grid edge");
             p.addBool("vct.specular", true, "trace one specular cone per pixel (aperture tan θ = GGX α)");
             p.addBool("vct.footprint_in_front", false,
