@@ -146,13 +146,17 @@ struct HostMips {
   std::vector<glm::vec4> iso, aniso;
   bool shVoxels = false;            // radiance from the SH chains (3 float4 per voxel), opacity from iso/aniso
   std::vector<glm::vec4> sh, shAniso;
-  bool borderEdge = false;  // vct.border=edge: positions clamped to the outermost voxel centres
-  // Trilinear filter of fetch(voxel index) over a volume of n³ voxels (outside: 0, or with
-  // borderEdge the edge voxels).
+  bool borderEdge = false;  // vct.border=edge: positions clamped to the outermost voxel centres ahead of d
+  // Trilinear filter of fetch(voxel index) over a volume of n³ voxels for a cone along d
+  // (outside: 0; with borderEdge, along each axis d heads out on, the edge voxels).
   template <class Fetch>
-  glm::vec4 trilinear(int n, glm::vec3 p, float scale, Fetch fetch) const {
+  glm::vec4 trilinear(int n, glm::vec3 p, glm::vec3 d, float scale, Fetch fetch) const {
     glm::vec3 u = p * scale - 0.5f;
-    if (borderEdge) u = glm::clamp(u, glm::vec3(0.0f), glm::vec3(float(n - 1)));
+    if (borderEdge)
+      for (int k = 0; k < 3; ++k) {
+        if (d[k] < 0.0f) u[k] = std::max(u[k], 0.0f);
+        if (d[k] > 0.0f) u[k] = std::min(u[k], float(n - 1));
+      }
     glm::vec3 fl = glm::floor(u), f = u - fl;
     glm::ivec3 i0(fl);
     glm::vec4 acc(0.0f);
@@ -174,12 +178,12 @@ struct HostMips {
   // evaluated towards the cone's apex (−d).
   glm::vec4 volume(bool isoChain, size_t offset, int n, glm::vec3 p, float scale, glm::vec3 d) const {
     const glm::vec4* radiance = (isoChain ? iso : aniso).data() + offset;
-    glm::vec4 c = trilinear(n, p, scale, [&](size_t i) { return radiance[i]; });
+    glm::vec4 c = trilinear(n, p, d, scale, [&](size_t i) { return radiance[i]; });
     if (!shVoxels) return c;
     const glm::vec4* coeffs = (isoChain ? sh : shAniso).data() + 3 * offset;
     glm::vec4 Y = shBasis(-d);
     for (int ch = 0; ch < 3; ++ch)
-      c[ch] = glm::dot(trilinear(n, p, scale, [&](size_t i) { return coeffs[3 * i + ch]; }), Y);
+      c[ch] = glm::dot(trilinear(n, p, d, scale, [&](size_t i) { return coeffs[3 * i + ch]; }), Y);
     return c;
   }
   glm::vec4 levelSample(int level, glm::vec3 p, glm::vec3 d, bool an) const {

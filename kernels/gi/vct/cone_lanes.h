@@ -267,21 +267,22 @@ __attribute__((always_inline)) inline void vct_add_pair(RgbaV* acc, floatV w0, f
 // weights wFirst, wSecond (each tap's weight moved to its place in the pair; a tap outside the
 // volume weighs 0, and so does the pair's other record); rows yr, zr clamped into the volume with
 // weights wy, wz (0 outside). With GI_VCT_BORDER_EDGE the position is first clamped to the
-// outermost voxel centres (vox_trilinear_taps), so no tap is outside.
+// outermost voxel centre along each axis on which d heads towards the grid's face
+// (vox_trilinear_taps), so no tap lies past a face ahead of the cone.
 typedef struct {
   intV xs, yr[2], zr[2];
   floatV wFirst, wSecond, wy[2], wz[2];
 } VctStencilV;
 
-__attribute__((always_inline)) inline VctStencilV vct_stencil_lanes(float3V p, floatV scale, intV n) {
+__attribute__((always_inline)) inline VctStencilV vct_stencil_lanes(float3V p, float3V d, floatV scale, intV n) {
   VctStencilV st;
   floatV ux = p.x * scale - 0.5f, uy = p.y * scale - 0.5f, uz = p.z * scale - 0.5f;
 #if GI_VCT_BORDER_EDGE
   {
     floatV zero = (floatV)(0.0f), last = convert_floatV(n - 1);  // two vectors: see min/max below
-    ux = fmin(fmax(ux, zero), last);
-    uy = fmin(fmax(uy, zero), last);
-    uz = fmin(fmax(uz, zero), last);
+    ux = GI_SEL(GI_SEL(ux, fmax(ux, zero), d.x < 0.0f), fmin(ux, last), d.x > 0.0f);
+    uy = GI_SEL(GI_SEL(uy, fmax(uy, zero), d.y < 0.0f), fmin(uy, last), d.y > 0.0f);
+    uz = GI_SEL(GI_SEL(uz, fmax(uz, zero), d.z < 0.0f), fmin(uz, last), d.z > 0.0f);
   }
 #endif
   floatV flx = floor(ux), fly = floor(uy), flz = floor(uz);
@@ -314,10 +315,10 @@ __attribute__((always_inline)) inline VctStencilV vct_stencil_lanes(float3V p, f
 // moved to its place in the pair (a tap outside the volume weighs 0, and so does the pair's other
 // record). Rows outside the volume are clamped into it and weigh 0. A 1-voxel volume's pair
 // reaches one record past it: the chains end with one zero record (VoxelScene).
-__attribute__((always_inline)) inline void vox_trilinear_lanes(global const float* vol, global const float* shVol, intV base, intV shift, float3V p,
+__attribute__((always_inline)) inline void vox_trilinear_lanes(global const float* vol, global const float* shVol, intV base, intV shift, float3V p, float3V d,
                                 floatV scale, floatV weight, floatV Y0, floatV Y1y, floatV Y1z, floatV Y1x, RgbaV* acc) {
   intV n = (intV)(1) << shift;
-  VctStencilV st = vct_stencil_lanes(p, scale, n);
+  VctStencilV st = vct_stencil_lanes(p, d, scale, n);
   intV xs = st.xs, yr[2] = {st.yr[0], st.yr[1]}, zr[2] = {st.zr[0], st.zr[1]};
   floatV wFirst = st.wFirst, wSecond = st.wSecond, wy[2] = {st.wy[0], st.wy[1]}, wz[2] = {st.wz[0], st.wz[1]};
 #pragma unroll
@@ -358,10 +359,10 @@ __attribute__((always_inline)) inline void vox_trilinear_lanes(global const floa
 // three vox_trilinear_lanes; the sums are associated differently (not bit-identical to them).
 __attribute__((always_inline)) inline void vox_trilinear_blend3_lanes(global const float* vol, intV base0, intV base1,
                                                                       intV base2, floatV b0, floatV b1, floatV b2,
-                                                                      intV shift, float3V p, floatV scale,
+                                                                      intV shift, float3V p, float3V d, floatV scale,
                                                                       floatV weight, RgbaV* acc) {
   intV n = (intV)(1) << shift;
-  VctStencilV st = vct_stencil_lanes(p, scale, n);
+  VctStencilV st = vct_stencil_lanes(p, d, scale, n);
 #pragma unroll
   for (int row = 0; row < 4; ++row) {
     int yb = row & 1, zb = row >> 1;
@@ -396,7 +397,7 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
   // isotropic levels ≥ 1 are not built with anisotropic mips, and level 0 has no directional
   // volumes unless GI_VCT_DIRECTIONAL; unwritten memory could hold NaN, and NaN·0 is NaN.
   if (GI_ANY(isoLanes))
-    vox_trilinear_lanes(m.iso, m.sh, GI_SEL((intV)(0), offset, isoLanes), GI_SEL((intV)(0), shift, isoLanes), p, scale,
+    vox_trilinear_lanes(m.iso, m.sh, GI_SEL((intV)(0), offset, isoLanes), GI_SEL((intV)(0), shift, isoLanes), p, d, scale,
                         GI_SEL((floatV)(0.0f), weight, isoLanes), Y0, Y1y, Y1z, Y1x, acc);
   if (!m.anisotropic || GI_ALL(isoLanes)) return;
   floatV da[3] = {d.x, d.y, d.z};
@@ -408,13 +409,13 @@ __attribute__((always_inline)) inline void vox_level_sample_lanes(VoxelMipsV m, 
                         (intV)(0), isoLanes);
 #if GI_VCT_SH
   for (int axis = 0; axis < 3; ++axis)
-    vox_trilinear_lanes(m.aniso, m.shAniso, base[axis], shiftDirectional, p, scale,
+    vox_trilinear_lanes(m.aniso, m.shAniso, base[axis], shiftDirectional, p, d, scale,
                         GI_SEL(weight * da[axis] * da[axis], (floatV)(0.0f), isoLanes), Y0, Y1y, Y1z, Y1x, acc);
 #else
   // The three volumes share the stencil: blended per tap pair before one transposition
   // (vox_trilinear_blend3_lanes), as the level-aligned march does.
   vox_trilinear_blend3_lanes(m.aniso, base[0], base[1], base[2], d.x * d.x, d.y * d.y, d.z * d.z, shiftDirectional, p,
-                             scale, GI_SEL(weight, (floatV)(0.0f), isoLanes), acc);
+                             d, scale, GI_SEL(weight, (floatV)(0.0f), isoLanes), acc);
 #endif
 }
 
@@ -494,7 +495,7 @@ __attribute__((always_inline)) inline void vox_level_sample_uniform_lanes(VoxelM
     dy2 = d.y * d.y;
     dz2 = d.z * d.z;
   }
-  VctStencilV st = vct_stencil_lanes(p, (floatV)(scale), (intV)(n));
+  VctStencilV st = vct_stencil_lanes(p, d, (floatV)(scale), (intV)(n));
   intV xs = st.xs, yr[2] = {st.yr[0], st.yr[1]}, zr[2] = {st.zr[0], st.zr[1]};
   floatV wFirst = st.wFirst, wSecond = st.wSecond, wy[2] = {st.wy[0], st.wy[1]}, wz[2] = {st.wz[0], st.wz[1]};
   // At the coarse levels the lanes (neighbouring pixels, same cone of the set) mostly read the

@@ -88,17 +88,23 @@ typedef struct {
 #endif
 
 // The 8 voxels and weights of a trilinear lookup in a volume of n³ voxels at p, given in level-0
-// voxel units from the grid corner; `scale` = 1 / 2^level. The grid's border (vct.border):
+// voxel units from the grid corner, for a cone travelling along d; `scale` = 1 / 2^level. The
+// grid's border (vct.border):
 //   zero (GI_VCT_BORDER_EDGE = 0): voxels outside the volume are empty (weight 0, index 0), so a
 //     sample whose filter reaches past the grid is diluted by the empty outside;
-//   edge (GI_VCT_BORDER_EDGE = 1): the position is clamped to the outermost voxel centres (a 3D
-//     texture's clamp-to-edge), so the outside repeats the edge voxels: what a ray leaving the grid
-//     meets first. At the coarse levels every sample reaches past the grid (level log2 N is one
-//     voxel), and a cone that ends on a wall at the grid's border sees it at full opacity.
-inline void vox_trilinear_taps(int n, float3 p, float scale, size_t idx[8], float w[8]) {
+//   edge (GI_VCT_BORDER_EDGE = 1): along each axis on which the cone travels towards a face of the
+//     grid, the position is clamped to the outermost voxel centre before that face (a 3D texture's
+//     clamp-to-edge, ahead of the cone only): the part of the filter past the face repeats the edge
+//     voxels, which is what the cone's rays meet before they leave the grid. At the coarse levels
+//     every sample reaches past the grid (level log2 N is one voxel), and a cone that ends on a
+//     wall at the border sees it at full opacity. Behind the cone and across it the outside stays
+//     empty: clamping there too repeats the walls a cone runs along, which the filter already
+//     holds (measured: docs/techniques/vct.md, Accuracy point 9).
+inline void vox_trilinear_taps(int n, float3 p, float3 d, float scale, size_t idx[8], float w[8]) {
   float3 u = p * scale - 0.5f;
 #if GI_VCT_BORDER_EDGE
-  u = clamp(u, 0.0f, (float)(n - 1));
+  u = select(u, fmax(u, 0.0f), d < 0.0f);
+  u = select(u, fmin(u, (float)(n - 1)), d > 0.0f);
 #endif
   float3 fl = floor(u);
   float3 f = u - fl;
@@ -112,11 +118,11 @@ inline void vox_trilinear_taps(int n, float3 p, float scale, size_t idx[8], floa
   }
 }
 
-// Trilinear lookup of one volume.
-inline float4 vox_trilinear(global const float4* vol, int n, float3 p, float scale) {
+// Trilinear lookup of one volume by a cone travelling along d.
+inline float4 vox_trilinear(global const float4* vol, int n, float3 p, float3 d, float scale) {
   size_t idx[8];
   float w[8];
-  vox_trilinear_taps(n, p, scale, idx, w);
+  vox_trilinear_taps(n, p, d, scale, idx, w);
   float4 acc = (float4)(0.0f);
   for (int k = 0; k < 8; ++k) acc += w[k] * vol[idx[k]];
   return acc;
@@ -125,11 +131,11 @@ inline float4 vox_trilinear(global const float4* vol, int n, float3 p, float sca
 // Trilinear lookup of an SH volume evaluated against basis Y, with the opacity of the matching
 // radiance volume: (premultiplied radiance rgb, α). Evaluation is linear, so evaluating the taps
 // and filtering the results equals filtering the coefficients and evaluating.
-inline float4 vox_trilinear_sh(global const float4* alphaVol, global const float4* shVol, int n, float3 p, float scale,
+inline float4 vox_trilinear_sh(global const float4* alphaVol, global const float4* shVol, int n, float3 p, float3 d, float scale,
                                float4 Y) {
   size_t idx[8];
   float w[8];
-  vox_trilinear_taps(n, p, scale, idx, w);
+  vox_trilinear_taps(n, p, d, scale, idx, w);
   float4 acc = (float4)(0.0f);
   for (int k = 0; k < 8; ++k) {
     global const float4* c = shVol + 3 * idx[k];
@@ -147,9 +153,9 @@ inline float4 vox_volume_sample(VoxelMips m, int level, int dir, float3 p, float
   size_t off = iso ? vox_level_offset(m.N, level) : vox_aniso_offset(m.N, level, dir);
 #if GI_VCT_SH
   // The light arriving at the cone's apex travels along −d.
-  return vox_trilinear_sh((iso ? m.iso : m.aniso) + off, (iso ? m.sh : m.shAniso) + 3 * off, n, p, scale, sh_basis(-d));
+  return vox_trilinear_sh((iso ? m.iso : m.aniso) + off, (iso ? m.sh : m.shAniso) + 3 * off, n, p, d, scale, sh_basis(-d));
 #else
-  return vox_trilinear((iso ? m.iso : m.aniso) + off, n, p, scale);
+  return vox_trilinear((iso ? m.iso : m.aniso) + off, n, p, d, scale);
 #endif
 }
 

@@ -209,9 +209,9 @@ TechniqueInfo vctTechniqueInfo() {
                         "cone's diameter (continuous; also used with footprint_in_front)");
             p.addChoice("vct.border", "zero", {"zero", "edge"},
                         "what a lookup reads past the grid's border: empty voxels (zero), so samples reaching past "
-                        "it are diluted, or the edge voxels (edge, a texture's clamp-to-edge), so a cone ending on a "
-                        "wall at the border sees it whole; edge gains in closed scenes and leaks more; "
-                        "docs/techniques/vct.md, Accuracy point 9");
+                        "it are diluted, or, ahead of the cone, the edge voxels (edge, a texture's clamp-to-edge in "
+                        "the direction of travel), so a cone ending on a wall at the border sees it whole; edge gains "
+                        "in closed scenes and leaks more; docs/techniques/vct.md, Accuracy point 9");
             p.addFloat("vct.max_distance", 1.0, 0.01, 2.0, "maximum cone length as a fraction of the grid edge");
             p.addBool("vct.specular", true, "trace one specular cone per pixel (aperture tan θ = GGX α)");
             p.addBool("vct.footprint_in_front", false,
