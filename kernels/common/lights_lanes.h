@@ -96,8 +96,7 @@ inline floatV shadow_visibilityV(global const GiLight* l, global const GiView* v
                                  global const float* depths, float3V x, float3V ng) {
   if (l->shadow_map < 0) return (floatV)(1.0f);
   int vi = l->shadow_map;
-  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
-  if (!cube) return shadow_pcf_viewV(views, offsets, depths, vi, x, ng);
+  if (!shadow_uses_cube(l)) return shadow_pcf_viewV(views, offsets, depths, vi, x, ng);
   // shadow_cube_face() per lane; each face present among the lanes is evaluated once.
   intV face = shadow_cube_faceV(l, x);
   floatV vis = (floatV)(1.0f);
@@ -144,8 +143,7 @@ inline floatV shadow_voxel_visibilityV(global const GiLight* l, global const GiV
                                        global const float* depths, float3V centre, float h) {
   if (l->shadow_map < 0) return (floatV)(1.0f);
   int vi = l->shadow_map;
-  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
-  if (!cube) return shadow_voxel_viewV(views, offsets, depths, vi, centre, h);
+  if (!shadow_uses_cube(l)) return shadow_voxel_viewV(views, offsets, depths, vi, centre, h);
   intV face = shadow_cube_faceV(l, centre);
   floatV vis = (floatV)(1.0f);
   for (int f = 0; f < 6; ++f) {

@@ -44,12 +44,17 @@ inline float shadow_pcf_view(global const GiView* views, global const uint* offs
   return lit * (1.0f / 9.0f);
 }
 
+// Whether light l's shadow map is a cube of 6 views (point lights and spot lights wider than
+// GI_SPOT_CUBE_COS; the host decides the same in src/raster/gbuffer.cpp, usesCube) rather than one view.
+inline bool shadow_uses_cube(global const GiLight* l) {
+  return l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
+}
+
 // The shadow view of light l that sees x (its cube face for point and wide spot lights), −1 when
 // the light casts no shadow.
 inline int shadow_view_index(global const GiLight* l, float3 x) {
   if (l->shadow_map < 0) return -1;
-  bool cube = l->type == GI_LIGHT_POINT || (l->type == GI_LIGHT_SPOT && l->cos_outer < GI_SPOT_CUBE_COS);
-  return l->shadow_map + (cube ? shadow_cube_face(x - vload3(0, l->position)) : 0);
+  return l->shadow_map + (shadow_uses_cube(l) ? shadow_cube_face(x - vload3(0, l->position)) : 0);
 }
 
 inline float shadow_visibility(global const GiLight* l, global const GiView* views, global const uint* offsets,
