@@ -199,6 +199,26 @@ inline SurfaceV resolve_surfaceV(const GiView* viewp, int px0, int py, uintV t, 
   return out;
 }
 
+// The visible-triangle ids of the `valid` pixels (or texels) of a row from i, the lanes past the
+// row's end set to GI_INVALID_ID (no surface).
+inline uintV gbuffer_load_row(global const uint* visTriangle, size_t i, int valid) {
+  if (valid == GI_VW) return vloadV(0, visTriangle + i);
+  uint ids[GI_VW];
+  for (int l = 0; l < GI_VW; ++l) ids[l] = l < valid ? visTriangle[i + l] : GI_INVALID_ID;
+  return vloadV(0, ids);
+}
+
+// One float4 plane of the `valid` pixels of a row from i, from four lane vectors (X, Y, Z, W).
+inline void gbuffer_store_row(global float4* plane, size_t i, int valid, floatV X, floatV Y, floatV Z, floatV W) {
+  if (valid == GI_VW) {
+    GI_AOS4_STORE((global float*)(plane + i), X, Y, Z, W)
+  } else {
+    float rows[4 * GI_VW];
+    GI_AOS4_STORE(rows, X, Y, Z, W)
+    for (int l = 0; l < valid; ++l) plane[i + l] = vload4(l, rows);
+  }
+}
+
 // Camera G-buffer, GI_VW pixels of a row per work-item. Planes (structure of arrays, see
 // src/raster/gbuffer.h): position (w = 1 surface, 0 background), geometric and shading normals,
 // diffuse albedo with metallic in w, specular F0 with roughness in w, emission, instance id.
@@ -213,31 +233,16 @@ kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global 
   if (px0 >= view.width || py >= view.height) return;
   size_t i = (size_t)py * view.width + px0;
   int valid = min(GI_VW, view.width - px0);
-  uintV t;
-  if (valid == GI_VW) {
-    t = vloadV(0, visTriangle + i);
-  } else {
-    uint tt[GI_VW];
-    for (int l = 0; l < GI_VW; ++l) tt[l] = l < valid ? visTriangle[i + l] : GI_INVALID_ID;
-    t = vloadV(0, tt);
-  }
+  uintV t = gbuffer_load_row(visTriangle, i, valid);
   intV surface = t != (uintV)(GI_INVALID_ID);
   floatV zero = (floatV)(0.0f);
-  float tmp[4 * GI_VW];
-#define GI_STORE_PLANE(plane, X, Y, Z, W)                                       \
-  if (valid == GI_VW) {                                                         \
-    GI_AOS4_STORE((global float*)(plane + i), X, Y, Z, W)                       \
-  } else {                                                                      \
-    GI_AOS4_STORE(tmp, X, Y, Z, W)                                              \
-    for (int l = 0; l < valid; ++l) plane[i + l] = vload4(l, tmp);              \
-  }
   if (!GI_ANY(surface)) {
-    GI_STORE_PLANE(outPosition, zero, zero, zero, zero)
-    GI_STORE_PLANE(outGeoNormal, zero, zero, zero, zero)
-    GI_STORE_PLANE(outNormal, zero, zero, zero, zero)
-    GI_STORE_PLANE(outAlbedo, zero, zero, zero, zero)
-    GI_STORE_PLANE(outSpecular, zero, zero, zero, zero)
-    GI_STORE_PLANE(outEmission, zero, zero, zero, zero)
+    gbuffer_store_row(outPosition, i, valid, zero, zero, zero, zero);
+    gbuffer_store_row(outGeoNormal, i, valid, zero, zero, zero, zero);
+    gbuffer_store_row(outNormal, i, valid, zero, zero, zero, zero);
+    gbuffer_store_row(outAlbedo, i, valid, zero, zero, zero, zero);
+    gbuffer_store_row(outSpecular, i, valid, zero, zero, zero, zero);
+    gbuffer_store_row(outEmission, i, valid, zero, zero, zero, zero);
     for (int l = 0; l < valid; ++l) outInstance[i + l] = GI_INVALID_ID;
     return;
   }
@@ -249,14 +254,13 @@ kernel void gbuffer_resolve(GiView view, global const uint* visTriangle, global 
   floatV metallic = sv.metallic, roughness = sv.roughness;
   floatV one = (floatV)(1.0f);
 #define GI_S(x) GI_SEL(zero, x, surface)
-  GI_STORE_PLANE(outPosition, GI_S(position.x), GI_S(position.y), GI_S(position.z), GI_S(one))
-  GI_STORE_PLANE(outGeoNormal, GI_S(geoN.x), GI_S(geoN.y), GI_S(geoN.z), zero)
-  GI_STORE_PLANE(outNormal, GI_S(shading.x), GI_S(shading.y), GI_S(shading.z), zero)
-  GI_STORE_PLANE(outAlbedo, GI_S(diffuse.x), GI_S(diffuse.y), GI_S(diffuse.z), GI_S(metallic))
-  GI_STORE_PLANE(outSpecular, GI_S(f0.x), GI_S(f0.y), GI_S(f0.z), GI_S(roughness))
-  GI_STORE_PLANE(outEmission, GI_S(emission.x), GI_S(emission.y), GI_S(emission.z), zero)
+  gbuffer_store_row(outPosition, i, valid, GI_S(position.x), GI_S(position.y), GI_S(position.z), GI_S(one));
+  gbuffer_store_row(outGeoNormal, i, valid, GI_S(geoN.x), GI_S(geoN.y), GI_S(geoN.z), zero);
+  gbuffer_store_row(outNormal, i, valid, GI_S(shading.x), GI_S(shading.y), GI_S(shading.z), zero);
+  gbuffer_store_row(outAlbedo, i, valid, GI_S(diffuse.x), GI_S(diffuse.y), GI_S(diffuse.z), GI_S(metallic));
+  gbuffer_store_row(outSpecular, i, valid, GI_S(f0.x), GI_S(f0.y), GI_S(f0.z), GI_S(roughness));
+  gbuffer_store_row(outEmission, i, valid, GI_S(emission.x), GI_S(emission.y), GI_S(emission.z), zero);
 #undef GI_S
-#undef GI_STORE_PLANE
   uintV inst = GI_SEL((uintV)(GI_INVALID_ID), GI_GATHER(uintV, triangleInstance, tg), surface);
   GI_STORE_LANES(uint, inst, outInstance, i, valid)
 }
@@ -277,28 +281,13 @@ kernel void rsm_resolve(GiView view, global const GiLight* lights, int lightInde
   if (px0 >= view.width || py >= view.height) return;
   size_t i = (size_t)py * view.width + px0;
   int valid = min(GI_VW, view.width - px0);
-  uintV t;
-  if (valid == GI_VW) {
-    t = vloadV(0, visTriangle + i);
-  } else {
-    uint tt[GI_VW];
-    for (int l = 0; l < GI_VW; ++l) tt[l] = l < valid ? visTriangle[i + l] : GI_INVALID_ID;
-    t = vloadV(0, tt);
-  }
+  uintV t = gbuffer_load_row(visTriangle, i, valid);
   intV surface = t != (uintV)(GI_INVALID_ID);
   floatV zero = (floatV)(0.0f), one = (floatV)(1.0f);
-  float tmp[4 * GI_VW];
-#define GI_STORE_PLANE(plane, X, Y, Z, W)                                       \
-  if (valid == GI_VW) {                                                         \
-    GI_AOS4_STORE((global float*)(plane + i), X, Y, Z, W)                       \
-  } else {                                                                      \
-    GI_AOS4_STORE(tmp, X, Y, Z, W)                                              \
-    for (int l = 0; l < valid; ++l) plane[i + l] = vload4(l, tmp);              \
-  }
   if (!GI_ANY(surface)) {
-    GI_STORE_PLANE(outPosition, zero, zero, zero, zero)
-    GI_STORE_PLANE(outNormal, zero, zero, zero, zero)
-    GI_STORE_PLANE(outFlux, zero, zero, zero, zero)
+    gbuffer_store_row(outPosition, i, valid, zero, zero, zero, zero);
+    gbuffer_store_row(outNormal, i, valid, zero, zero, zero, zero);
+    gbuffer_store_row(outFlux, i, valid, zero, zero, zero, zero);
     return;
   }
   SurfaceV sv = resolve_surfaceV(&view, px0, py, t, surface, false, positions, normals, tangents, uvs, triangles,
@@ -325,9 +314,8 @@ kernel void rsm_resolve(GiView view, global const GiLight* lights, int lightInde
     flux = selV(f3v(zero, zero, zero), scaleV(f3v(sv.diffuse.x * Iw.x, sv.diffuse.y * Iw.y, sv.diffuse.z * Iw.z), omega), f);
   }
 #define GI_S(x) GI_SEL(zero, x, surface)
-  GI_STORE_PLANE(outPosition, GI_S(sv.position.x), GI_S(sv.position.y), GI_S(sv.position.z), GI_S(one))
-  GI_STORE_PLANE(outNormal, GI_S(sv.normal.x), GI_S(sv.normal.y), GI_S(sv.normal.z), zero)
-  GI_STORE_PLANE(outFlux, GI_S(flux.x), GI_S(flux.y), GI_S(flux.z), zero)
+  gbuffer_store_row(outPosition, i, valid, GI_S(sv.position.x), GI_S(sv.position.y), GI_S(sv.position.z), GI_S(one));
+  gbuffer_store_row(outNormal, i, valid, GI_S(sv.normal.x), GI_S(sv.normal.y), GI_S(sv.normal.z), zero);
+  gbuffer_store_row(outFlux, i, valid, GI_S(flux.x), GI_S(flux.y), GI_S(flux.z), zero);
 #undef GI_S
-#undef GI_STORE_PLANE
 }

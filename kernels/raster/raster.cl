@@ -26,12 +26,6 @@
 #endif
 #define GI_MAX_CLIP_VERTS 9
 
-#if GI_VW == 1
-#define GI_SELECT(a, b, c) ((c) ? (b) : (a))
-#else
-#define GI_SELECT(a, b, c) select(a, b, c)
-#endif
-
 // Sutherland–Hodgman step: keeps the part of the polygon where dot(plane, v) >= 0.
 inline int clip_polygon(float4* in, int n, float4* out, float4 plane) {
   int m = 0;
@@ -252,6 +246,23 @@ inline bool alpha_cut_out(const GiView* view, float px, float py, uint triangle,
   return material_cut_out(&materials[tri.w], textures, texels, uv, 0.0f);
 }
 
+// Writes one row of GI_VW pixels from (px0, py) (fewer at the image's right edge) from the
+// lanes' nearest-hit keys (the depth's ordered bits << 32 | triangle, as the tile loops build
+// them: the smallest key is the nearest): the triangle id and the depth decoded from the key
+// (∞ where nothing was hit).
+inline void raster_store_row(const GiView* view, ulongV best, int px0, int py, global uint* outTriangle,
+                             global float* outDepth) {
+  uintV hiBits = convert_uintV(best >> 32);
+  uintV triOut = convert_uintV(best & (ulongV)(0xFFFFFFFFul));
+  floatV depth = view->orthographic ? view->znear + as_floatV(hiBits) * (view->zfar - view->znear)
+                                    : 1.0f / as_floatV(~hiBits);
+  depth = GI_SEL(depth, (floatV)(GI_INF), (intV)(triOut == (uintV)(GI_INVALID_ID)));
+  size_t base = (size_t)py * (size_t)view->width + (size_t)px0;
+  int valid = min(GI_VW, view->width - px0);
+  GI_STORE_LANES(uint, triOut, outTriangle, base, valid)
+  GI_STORE_LANES(float, depth, outDepth, base, valid)
+}
+
 #if GI_VW == GI_TILE
 // CPU form: one work-item per tile, GI_VW-wide vectors per tile row. The triangle loop is outside,
 // and each triangle only visits the tile rows its bounding box spans, with edge functions and
@@ -314,25 +325,7 @@ kernel void raster_tiles(global const GiRasterTriangle* tris, global const uint*
   for (int row = 0; row < GI_TILE; ++row) {
     int py = py0 + row;
     if (py >= view.height) break;
-    uintV hiBits = convert_uintV(best[row] >> 32);
-    uintV triOut = convert_uintV(best[row] & (ulongV)(0xFFFFFFFFul));
-    floatV depth = view.orthographic ? view.znear + as_floatV(hiBits) * (view.zfar - view.znear)
-                                     : 1.0f / as_floatV(~hiBits);
-    depth = select(depth, (floatV)(GI_INF), (intV)(triOut == (uintV)(GI_INVALID_ID)));
-    size_t base = (size_t)py * (size_t)view.width + (size_t)px0;
-    if (px0 + GI_VW <= view.width) {
-      vstoreV(triOut, 0, outTriangle + base);
-      vstoreV(depth, 0, outDepth + base);
-    } else {
-      uint t[GI_VW];
-      float d[GI_VW];
-      vstoreV(triOut, 0, t);
-      vstoreV(depth, 0, d);
-      for (int l = 0; l < view.width - px0; ++l) {
-        outTriangle[base + l] = t[l];
-        outDepth[base + l] = d[l];
-      }
-    }
+    raster_store_row(&view, best[row], px0, py, outTriangle, outDepth);
   }
 }
 #else
@@ -384,31 +377,9 @@ kernel void raster_tiles(global const GiRasterTriangle* tris, global const uint*
           lanes[l] = 0;
       nearer = vloadV(0, lanes);
     }
-    best = GI_SELECT(best, key, nearer);
+    best = GI_SEL(best, key, nearer);
   }
 
-  uintV hiBits = convert_uintV(best >> 32);
-  uintV triOut = convert_uintV(best & (ulongV)(0xFFFFFFFFul));
-  floatV depth;
-  if (view.orthographic)
-    depth = view.znear + as_floatV(hiBits) * (view.zfar - view.znear);
-  else
-    depth = 1.0f / as_floatV(~hiBits);
-  depth = GI_SELECT(depth, (floatV)(GI_INF), (intV)(triOut == (uintV)(GI_INVALID_ID)));
-
-  size_t base = (size_t)py * (size_t)view.width + (size_t)px0;
-  if (px0 + GI_VW <= view.width) {
-    vstoreV(triOut, 0, outTriangle + base);
-    vstoreV(depth, 0, outDepth + base);
-  } else {
-    uint t[GI_VW];
-    float d[GI_VW];
-    vstoreV(triOut, 0, t);
-    vstoreV(depth, 0, d);
-    for (int l = 0; l < view.width - px0; ++l) {
-      outTriangle[base + l] = t[l];
-      outDepth[base + l] = d[l];
-    }
-  }
+  raster_store_row(&view, best, px0, py, outTriangle, outDepth);
 }
 #endif
