@@ -49,7 +49,7 @@
 // mask, the sample loop has a constant trip count and is unrolled, and the surfaces seen at the
 // projected samples are gathered — one 4-byte depth-plane record each (ssao_depth_planes), in
 // camera space, so that a sample costs one division to project and one 32-bit hardware gather on
-// AVX2/AVX-512 (GI_GATHER of uint), and the 0.9 MB of records at 640×360 stay in a 1 MB L2 cache
+// AVX2/AVX-512 (SSAO_GATHER_RECORDS), and the 0.9 MB of records at 640×360 stay in a 1 MB L2 cache
 // (8-byte records took 1.7× the CPU time on the 2-core EPYC, docs/PERFORMANCE.md). A group cut by
 // the right image border reads its last pixel repeatedly and stores only its valid lanes.
 
@@ -169,15 +169,31 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
   GI_STORE_LANES(uint, w, records, i0, valid)
 }
 
-// The records at the lanes' indices q. With AVX-512 (GI_VW 16 on x86 CPUs) one vpgatherdd with
-// the 32-bit indices: GI_GATHER compiles to two vpgatherqd on 64-bit indices (each index sign-
-// extended, the halves split and joined); the one gather took 5–11 % less CPU time of planes +
-// occlusion on the 2-core AMD EPYC with AVX-512 (docs/PERFORMANCE.md). The builtin takes a flat pointer: x86
-// OpenCL CPU devices have one address space (only they define __AVX512F__).
+// The records at the lanes' indices q, with the CPU's 32-bit-index hardware gather where it has
+// one. The builtins take a flat pointer: x86 OpenCL CPU devices have one address space (only they
+// define __AVX512F__ / __AVX2__).
+// - AVX-512 (GI_VW 16): one vpgatherdd. GI_GATHER compiles to two vpgatherqd on 64-bit indices
+//   (each index sign-extended, the halves split and joined); the one gather took 5–11 % less CPU
+//   time of planes + occlusion on the 2-core AMD EPYC with AVX-512 (docs/PERFORMANCE.md).
+// - AVX2 without AVX-512 (GI_VW 8 there, or 16 when forced): one vpgatherdd per 8 lanes. GI_GATHER
+//   compiles to a load and an element insert per lane there; the gather took 8–14 % less CPU time
+//   of planes + occlusion on the 2-core AMD EPYC with AVX2 (docs/PERFORMANCE.md, "On the AVX2
+//   machine of 3 Dec").
 #if defined(__has_builtin) && GI_VW == 16 && defined(__AVX512F__)
 #if __has_builtin(__builtin_ia32_gathersiv16si)
 #define SSAO_GATHER_RECORDS(records, q) \
   as_uint16(__builtin_ia32_gathersiv16si((int16)(0), (const void*)(size_t)(records), (q), (ushort)0xffff, 4))
+#endif
+#elif defined(__has_builtin) && (GI_VW == 8 || GI_VW == 16) && defined(__AVX2__)
+#if __has_builtin(__builtin_ia32_gatherd_d256)
+#define SSAO_GATHER8_AVX2(records, q8) \
+  __builtin_ia32_gatherd_d256((int8)(0), (const int*)(size_t)(records), (q8), (int8)(-1), 4)
+#if GI_VW == 16
+#define SSAO_GATHER_RECORDS(records, q) \
+  as_uint16((int16)(SSAO_GATHER8_AVX2(records, (q).lo), SSAO_GATHER8_AVX2(records, (q).hi)))
+#else
+#define SSAO_GATHER_RECORDS(records, q) as_uint8(SSAO_GATHER8_AVX2(records, q))
+#endif
 #endif
 #endif
 #ifndef SSAO_GATHER_RECORDS
