@@ -564,12 +564,18 @@ TEST(Ssao, ChainOccludesTheIndirectTermOfTheTechniqueBeforeIt) {
   }
   EXPECT_GT(occludedPixels, 50);
 
-  for (const char* bad : {"ssao+vpl", "vpl+ssao+ssao", "vpl+nonsense", "vpl+"}) {
+  for (const char* bad : {"ssao+vpl", "vpl+ssao+ssao", "vpl+nonsense", "vpl+", "direct+ssao", "vpl+direct"}) {
     try {
       parseTechniqueChain(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
     }
+  }
+  // "direct" in a chain: said so, not "unknown technique 'direct' (available: direct, …)".
+  try {
+    parseTechniqueChain("direct+ssao");
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot be part of a chain"), std::string::npos) << e.what();
   }
 }

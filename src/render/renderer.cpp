@@ -89,6 +89,12 @@ std::vector<const TechniqueInfo*> parseTechniqueChain(const std::string& chain) 
     size_t plus = chain.find('+', start);
     std::string name = chain.substr(start, plus == std::string::npos ? std::string::npos : plus - start);
     const TechniqueInfo* info = findTechnique(name);
+    // "direct" is no technique object: the renderer runs it alone (direct light, no indirect
+    // term), so there is nothing for a modifier to act on and nothing for it to follow.
+    if (!info && name == "direct")
+      throw Error("'direct' (direct light only, no indirect term) cannot be part of a chain, in '" + chain +
+                  "': run it alone, or chain a modifier after a technique that computes indirect light, e.g. "
+                  "lpv+ssao (ssao alone: --technique ssao)");
     if (!info) {
       std::string names = "direct";
       for (auto& t : techniqueRegistry()) names += ", " + t.name;
