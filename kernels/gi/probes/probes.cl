@@ -344,11 +344,16 @@ inline int probe_lane_min(intV v) {
   return min(c.x, c.y);
 }
 
-// Whether any lane of a mask (lanes −1 or 0) is set. With AVX-512 the lanes' sign bits as a mask
-// register (vpmovd2m), one instruction; elsewhere the lane minimum.
+// Whether any lane of a mask (lanes −1 or 0) is set. With AVX-512 (16 lanes) the lanes' sign bits as
+// a mask register (vpmovd2m), with AVX (8 lanes) as a general register (vmovmskps): one instruction
+// each; elsewhere the lane minimum.
 #if defined(__has_builtin) && defined(GI_DEVICE_CPU) && GI_VW == 16 && defined(__AVX512DQ__)
 #if __has_builtin(__builtin_ia32_cvtd2mask512)
 #define PROBE_MASK_BITS(m) __builtin_ia32_cvtd2mask512(m)
+#endif
+#elif defined(__has_builtin) && defined(GI_DEVICE_CPU) && GI_VW == 8 && defined(__AVX__)
+#if __has_builtin(__builtin_ia32_movmskps256)
+#define PROBE_MASK_BITS(m) __builtin_ia32_movmskps256(as_float8(m))
 #endif
 #endif
 inline int probe_lane_any(intV m) {
@@ -359,19 +364,21 @@ inline int probe_lane_any(intV m) {
 #endif
 }
 
-// Lane l of v (l varies). With AVX-512 one lane permutation (vpermd) of v by a vector of l; elsewhere
-// v through a private array. (Through the array with AVX-512, a 64-byte vector stored in 16-byte
+// Lane l of v (l varies). With AVX-512 (16 lanes) or AVX2 (8 lanes) one lane permutation (vpermd) of
+// v by a vector of l; elsewhere v through a private array. (Through the array with AVX-512, a 64-byte vector stored in 16-byte
 // parts and a 4-byte load of one of them, the distance passes' key reads cost 6–10 % of the
 // shading: docs/PERFORMANCE.md, "probes: the 8 probes' weights without branches, lane keys by
 // permutation".) __has_builtin is tested only where PROBE_MASK_BITS says it exists.
 #ifdef PROBE_MASK_BITS
-#if __has_builtin(__builtin_ia32_permvarsi512)
+#if GI_VW == 16 && __has_builtin(__builtin_ia32_permvarsi512)
 #define PROBE_LANE_PERMUTE
-#endif
-#endif
-#ifdef PROBE_LANE_PERMUTE
 inline int probe_lane(intV v, int l) { return __builtin_ia32_permvarsi512(v, (intV)(l))[0]; }
-#else
+#elif GI_VW == 8 && defined(__AVX2__) && __has_builtin(__builtin_ia32_permvarsi256)
+#define PROBE_LANE_PERMUTE
+inline int probe_lane(intV v, int l) { return __builtin_ia32_permvarsi256(v, (intV)(l))[0]; }
+#endif
+#endif
+#ifndef PROBE_LANE_PERMUTE
 inline int probe_lane(intV v, int l) {
   int lanes[GI_VW];
   vstoreV(v, 0, lanes);
