@@ -3,7 +3,10 @@
 #pragma once
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -96,6 +99,54 @@ inline std::map<std::string, double> timeTechnique(cl::Context& ctx, const Scene
   std::printf("  %-34s %8.3f ms\n", "technique total", total);
   out["__total"] = total;
   return out;
+}
+
+// Kernel A/B of one technique configuration (GI_AB_KERNEL_DIRS="DIR_A,DIR_B", two kernel trees
+// as for GI_KERNEL_DIR): one renderer per tree, each built and warmed up with GI_KERNEL_DIR set to
+// its tree, then frames rendered alternately A, B, A, B, … so that both variants see the same
+// machine load; prints each technique pass's minimum and median device milliseconds per variant.
+// Returns false (printing nothing) when the variable is unset; throws without the comma.
+inline bool abTechnique(cl::Context& ctx, const Scene& scene, const FrameSettings& a, const std::string& technique,
+                        const std::vector<std::string>& sets, const std::string& title) {
+  const char* e = std::getenv("GI_AB_KERNEL_DIRS");
+  if (!e) return false;
+  std::string s(e);
+  size_t comma = s.find(',');
+  if (comma == std::string::npos || comma == 0 || comma + 1 == s.size())
+    throw std::runtime_error("GI_AB_KERNEL_DIRS = '" + s + "': expected two kernel folders, DIR_A,DIR_B");
+  const std::string dirs[2] = {s.substr(0, comma), s.substr(comma + 1)};
+  RenderSettings rs;
+  rs.width = a.width;
+  rs.height = a.height;
+  rs.technique = technique;
+  rs.sets = sets;
+  std::vector<std::unique_ptr<Renderer>> r;
+  for (const std::string& d : dirs) {
+    setenv("GI_KERNEL_DIR", d.c_str(), 1);
+    r.push_back(std::make_unique<Renderer>(ctx, scene, rs));
+    for (int i = 0; i < a.warmup; ++i) r.back()->renderFrame();
+  }
+  unsetenv("GI_KERNEL_DIR");
+  std::map<std::string, std::vector<double>> per[2];
+  std::vector<std::string> order;
+  for (int f = 0; f < a.frames; ++f)
+    for (int k = 0; k < 2; ++k)
+      for (auto& [name, ms] : r[k]->renderFrame()) {
+        if (k == 0 && !per[0].count(name)) order.push_back(name);
+        per[k][name].push_back(ms);
+      }
+  std::printf("\n%s  (%s", title.c_str(), technique.c_str());
+  for (auto& x : sets) std::printf(" %s", x.c_str());
+  std::printf("), kernel A/B, %d alternating frames: A = %s, B = %s\n", a.frames, dirs[0].c_str(), dirs[1].c_str());
+  for (auto& name : order) {
+    if (name.rfind(technique, 0) != 0) continue;
+    for (int k = 0; k < 2; ++k) {
+      const std::vector<double>& ms = per[k][name];
+      std::printf("  %-34s %c: min %8.3f, median %8.3f ms\n", name.c_str(), char('A' + k),
+                  *std::min_element(ms.begin(), ms.end()), median(ms));
+    }
+  }
+  return true;
 }
 
 }  // namespace gi::timing

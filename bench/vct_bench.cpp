@@ -12,6 +12,9 @@
 //   machine the minimum is the better estimate of the unloaded time).
 // --only cones: only the two isotropic 128³ configurations (diffuse cones at full and at half
 //   resolution, specular cone), for A/B timing of the cone marches.
+// GI_AB_KERNEL_DIRS=DIR_A,DIR_B (two kernel trees, as for GI_KERNEL_DIR): each configuration is
+//   rendered by one renderer per tree, frames alternating, and both variants' passes are printed
+//   (min and median): the way to compare a kernel change on a noisy machine.
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
@@ -90,7 +93,9 @@ int main(int argc, char** argv) {
       configs.push_back({{"vct.resolution=64"}, "64^3 anisotropic"});
       configs.push_back({{"vct.resolution=256", "vct.downsample=2"}, "256^3 anisotropic, half resolution"});
     }
-    for (const Config& c : configs) timing::timeTechnique(ctx, scene, a, "vct", c.sets, c.title);
+    for (const Config& c : configs)
+      if (!timing::abTechnique(ctx, scene, a, "vct", c.sets, c.title))
+        timing::timeTechnique(ctx, scene, a, "vct", c.sets, c.title);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
