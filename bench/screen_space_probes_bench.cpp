@@ -10,7 +10,7 @@
 // seconds of this process (PoCL's worker threads included) over repeated calls, which other
 // processes' time slices do not inflate (shared caches still do, a little). On an idle machine
 // wall time ≈ CPU time / cores.
-// Kernel A/B under load: GI_AB_KERNEL_DIRS=DIR_A,DIR_B (see abKernelDirs) times two kernel trees
+// Kernel A/B under load: GI_AB_KERNEL_DIRS=DIR_A,DIR_B (see timing::abKernelDirs) times two kernel trees
 // against each other in alternating calls after the device-time section.
 // probes.update_budget (not with --quick; alone with --only probes-budget): process CPU time of one
 // update of a dense 32x16x32 grid with 256 and 1024 of its probes per update and with all, and of
@@ -31,7 +31,6 @@
 #include "gi/probes/probes_technique.h"
 #include "gi/ssao/ssao_technique.h"
 #include "technique_timing.h"
-#include "util/error.h"
 
 using namespace gi;
 
@@ -60,20 +59,6 @@ void printCpuTime(cl::Context& ctx, const char* what, int calls, const std::func
   double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   std::printf("  %-44s %8.2f CPU-ms per call (min %.2f; wall %.2f ms), %d calls\n", what,
               1e3 * (processCpuSeconds() - cpu0) / calls, 1e3 * minCall, 1e3 * wall / calls, calls);
-}
-
-// Kernel A/B mode (GI_AB_KERNEL_DIRS="DIR_A,DIR_B", two kernel trees as for GI_KERNEL_DIR): the
-// judged passes are built once from each tree and called alternately in this one process, so
-// that both variants see the same load; prints the minimum, lower quartile and median CPU time per
-// call of each. Empty when the variable is unset; an error without the comma.
-std::vector<std::string> abKernelDirs() {
-  const char* e = std::getenv("GI_AB_KERNEL_DIRS");
-  if (!e) return {};
-  std::string s(e);
-  size_t c = s.find(',');
-  if (c == std::string::npos || c == 0 || c + 1 == s.size())
-    throw Error("GI_AB_KERNEL_DIRS = '" + s + "': expected two kernel folders, DIR_A,DIR_B");
-  return {s.substr(0, c), s.substr(c + 1)};
 }
 
 void printAlternatingCpuTimes(cl::Context& ctx, const char* what, int rounds,
@@ -239,7 +224,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<Renderer> frame = directFrame(ctx, scene, a);
     const int calls = 3 * a.frames;
     if (runBudget) printBudgetUpdateTimes(ctx, scene, frame->deviceScene(), calls);
-    if (std::vector<std::string> dirs = abKernelDirs(); !dirs.empty()) {
+    if (std::vector<std::string> dirs = timing::abKernelDirs(); !dirs.empty()) {
       runKernelAB(ctx, scene, *frame, dirs, runSsao, runProbes, 10 * a.frames);
       return 0;
     }

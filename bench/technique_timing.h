@@ -101,20 +101,28 @@ inline std::map<std::string, double> timeTechnique(cl::Context& ctx, const Scene
   return out;
 }
 
-// Kernel A/B of one technique configuration (GI_AB_KERNEL_DIRS="DIR_A,DIR_B", two kernel trees
-// as for GI_KERNEL_DIR): one renderer per tree, each built and warmed up with GI_KERNEL_DIR set to
-// its tree, then frames rendered alternately A, B, A, B, … so that both variants see the same
-// machine load; prints each technique pass's minimum and median device milliseconds per variant.
-// Returns false (printing nothing) when the variable is unset; throws without the comma.
+// The two kernel trees of a kernel A/B (GI_AB_KERNEL_DIRS="DIR_A,DIR_B", each a folder holding
+// kernels/ as for GI_KERNEL_DIR): the benches build the judged passes once from each tree and
+// run them alternately in one process, so that both variants see the same machine load. Empty
+// when the variable is unset; an error without the comma.
+inline std::vector<std::string> abKernelDirs() {
+  const char* e = std::getenv("GI_AB_KERNEL_DIRS");
+  if (!e) return {};
+  std::string s(e);
+  size_t c = s.find(',');
+  if (c == std::string::npos || c == 0 || c + 1 == s.size())
+    throw std::runtime_error("GI_AB_KERNEL_DIRS = '" + s + "': expected two kernel folders, DIR_A,DIR_B");
+  return {s.substr(0, c), s.substr(c + 1)};
+}
+
+// Kernel A/B of one technique configuration (abKernelDirs): one renderer per tree, each built and
+// warmed up with GI_KERNEL_DIR set to its tree, then frames rendered alternately A, B, A, B, …;
+// prints each technique pass's minimum and median device milliseconds per variant.
+// Returns false (printing nothing) when GI_AB_KERNEL_DIRS is unset.
 inline bool abTechnique(cl::Context& ctx, const Scene& scene, const FrameSettings& a, const std::string& technique,
                         const std::vector<std::string>& sets, const std::string& title) {
-  const char* e = std::getenv("GI_AB_KERNEL_DIRS");
-  if (!e) return false;
-  std::string s(e);
-  size_t comma = s.find(',');
-  if (comma == std::string::npos || comma == 0 || comma + 1 == s.size())
-    throw std::runtime_error("GI_AB_KERNEL_DIRS = '" + s + "': expected two kernel folders, DIR_A,DIR_B");
-  const std::string dirs[2] = {s.substr(0, comma), s.substr(comma + 1)};
+  const std::vector<std::string> dirs = abKernelDirs();
+  if (dirs.empty()) return false;
   RenderSettings rs;
   rs.width = a.width;
   rs.height = a.height;
