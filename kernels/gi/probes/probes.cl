@@ -364,11 +364,12 @@ inline int probe_lane_any(intV m) {
 #endif
 }
 
-// Lane l of v (l varies). With AVX-512 (16 lanes) or AVX2 (8 lanes) one lane permutation (vpermd) of
-// v by a vector of l; elsewhere v through a private array. (Through the array with AVX-512, a 64-byte vector stored in 16-byte
-// parts and a 4-byte load of one of them, the distance passes' key reads cost 6–10 % of the
-// shading: docs/PERFORMANCE.md, "probes: the 8 probes' weights without branches, lane keys by
-// permutation".) __has_builtin is tested only where PROBE_MASK_BITS says it exists.
+// Lane l of v (l varies). With AVX-512 (16 lanes) or AVX2 (8 lanes) one lane permutation (vpermd)
+// of v by a vector of l; elsewhere v through a private array. (Through the array with AVX-512, a
+// 64-byte vector stored in 16-byte parts and a 4-byte load of one of them, the distance passes' key
+// reads cost 6–10 % of the shading: docs/PERFORMANCE.md, "probes: the 8 probes' weights without
+// branches, lane keys by permutation".) __has_builtin is tested only where PROBE_MASK_BITS says it
+// exists.
 #ifdef PROBE_MASK_BITS
 #if GI_VW == 16 && __has_builtin(__builtin_ia32_permvarsi512)
 #define PROBE_LANE_PERMUTE

@@ -176,8 +176,8 @@ kernel void ssao_depth_planes(int gridWidth, int gridHeight, int width, GiView c
 //   (each index sign-extended, the halves split and joined); the one gather took 5–11 % less CPU
 //   time of planes + occlusion on the 2-core AMD EPYC with AVX-512 (docs/PERFORMANCE.md).
 // - AVX2 without AVX-512 (GI_VW 8 there, or 16 when forced): one vpgatherdd per 8 lanes. GI_GATHER
-//   compiles to a load and an element insert per lane there; the gather took 8–14 % less CPU time
-//   of planes + occlusion on the 2-core AMD EPYC with AVX2 (docs/PERFORMANCE.md, "On the AVX2
+//   compiles to a load and an element insert per lane there; the gathers took 4–14 % less CPU time
+//   (median of 50 calls) of planes + occlusion on the 2-core AMD EPYC with AVX2 (docs/PERFORMANCE.md, "On the AVX2
 //   machine of 3 Dec").
 #if defined(__has_builtin) && GI_VW == 16 && defined(__AVX512F__)
 #if __has_builtin(__builtin_ia32_gathersiv16si)
