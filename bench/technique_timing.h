@@ -64,17 +64,31 @@ inline Scene loadBenchScene(const std::string& path) {
   }
 }
 
-// Renders warm-up frames, then `frames` timed ones; prints the technique's kernels (not the shared
-// raster passes) and a total; returns every pass's median by name, plus "__total".
-inline std::map<std::string, double> timeTechnique(cl::Context& ctx, const Scene& scene, const FrameSettings& a,
-                                                   const std::string& technique, std::vector<std::string> sets,
-                                                   const std::string& title) {
+// The renderer settings of one benchmark configuration.
+inline RenderSettings renderSettings(const FrameSettings& a, const std::string& technique,
+                                     const std::vector<std::string>& sets) {
   RenderSettings rs;
   rs.width = a.width;
   rs.height = a.height;
   rs.technique = technique;
   rs.sets = sets;
-  Renderer r(ctx, scene, rs);
+  return rs;
+}
+
+// "\n<title>  (<technique> <set> <set> …)", the heading of a configuration's table (no newline).
+inline void printConfiguration(const std::string& title, const std::string& technique,
+                               const std::vector<std::string>& sets) {
+  std::printf("\n%s  (%s", title.c_str(), technique.c_str());
+  for (auto& s : sets) std::printf(" %s", s.c_str());
+  std::printf(")");
+}
+
+// Renders warm-up frames, then `frames` timed ones; prints the technique's kernels (not the shared
+// raster passes) and a total; returns every pass's median by name, plus "__total".
+inline std::map<std::string, double> timeTechnique(cl::Context& ctx, const Scene& scene, const FrameSettings& a,
+                                                   const std::string& technique, std::vector<std::string> sets,
+                                                   const std::string& title) {
+  Renderer r(ctx, scene, renderSettings(a, technique, sets));
   for (int i = 0; i < a.warmup; ++i) r.renderFrame();
   std::map<std::string, std::vector<double>> per;
   std::vector<std::string> order;
@@ -83,9 +97,8 @@ inline std::map<std::string, double> timeTechnique(cl::Context& ctx, const Scene
       if (!per.count(name)) order.push_back(name);
       per[name].push_back(ms);
     }
-  std::printf("\n%s  (%s", title.c_str(), technique.c_str());
-  for (auto& s : sets) std::printf(" %s", s.c_str());
-  std::printf(")\n");
+  printConfiguration(title, technique, sets);
+  std::printf("\n");
   std::map<std::string, double> out;
   double total = 0;
   for (auto& name : order) {
@@ -123,11 +136,7 @@ inline bool abTechnique(cl::Context& ctx, const Scene& scene, const FrameSetting
                         const std::vector<std::string>& sets, const std::string& title) {
   const std::vector<std::string> dirs = abKernelDirs();
   if (dirs.empty()) return false;
-  RenderSettings rs;
-  rs.width = a.width;
-  rs.height = a.height;
-  rs.technique = technique;
-  rs.sets = sets;
+  const RenderSettings rs = renderSettings(a, technique, sets);
   std::vector<std::unique_ptr<Renderer>> r;
   for (const std::string& d : dirs) {
     setenv("GI_KERNEL_DIR", d.c_str(), 1);
@@ -143,9 +152,8 @@ inline bool abTechnique(cl::Context& ctx, const Scene& scene, const FrameSetting
         if (k == 0 && !per[0].count(name)) order.push_back(name);
         per[k][name].push_back(ms);
       }
-  std::printf("\n%s  (%s", title.c_str(), technique.c_str());
-  for (auto& x : sets) std::printf(" %s", x.c_str());
-  std::printf("), kernel A/B, %d alternating frames: A = %s, B = %s\n", a.frames, dirs[0].c_str(), dirs[1].c_str());
+  printConfiguration(title, technique, sets);
+  std::printf(", kernel A/B, %d alternating frames: A = %s, B = %s\n", a.frames, dirs[0].c_str(), dirs[1].c_str());
   for (auto& name : order) {
     if (name.rfind(technique, 0) != 0) continue;
     for (int k = 0; k < 2; ++k) {
